@@ -1,0 +1,66 @@
+// The film: raw sums in double, normalized only when developed, so that partial films merge exactly.
+//
+// Two buffers, both with a box reconstruction filter of one pixel (each sample lands in one pixel):
+//  - pixel estimates: sum of sample values and the number of samples per pixel (camera-driven samples,
+//    pt and bdpt's t>=2 strategies). Developed as sum / count.
+//  - splats: sum of splatted values anywhere on the film (light tracing, bdpt's t=1, every MLT splat).
+//    Developed as splatSum * splatScale, where the caller supplies the scale:
+//      light tracing / bdpt t=1 with N light paths over P pixels:  P / N     (camera We is normalized
+//        over the whole film, see render/camera.h)
+//      Markov chains:                                               b * P / M (M = total mutations;
+//        derivation in mlt/develop.h)
+// Accumulation order matters for bit-identical results: merge() adds another film element-wise, and
+// callers merge in a fixed order (chain index) to make the sums independent of scheduling.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/core/vec.h"
+
+namespace mlt {
+
+struct RGBd {
+  double r = 0, g = 0, b = 0;
+  void add(const Color& c) { r += c.r; g += c.g; b += c.b; }
+  RGBd& operator+=(const RGBd& o) { r += o.r; g += o.g; b += o.b; return *this; }
+};
+
+class Film {
+ public:
+  Film() = default;
+  Film(int width, int height);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  size_t pixelCount() const { return size_t(width_) * size_t(height_); }
+
+  // A camera sample for the pixel containing pRaster (pixels). Non-finite values are counted and dropped.
+  void addSample(Vec2 pRaster, const Color& L);
+  // A splat anywhere on the film. Non-finite values are counted and dropped; off-film splats are ignored.
+  void addSplat(Vec2 pRaster, const Color& v);
+  // Element-wise sum; sizes must match (throws std::invalid_argument otherwise).
+  void merge(const Film& other);
+
+  // Developed linear RGB, row-major from the top-left: pixel sum / count + splatScale * splat sum.
+  std::vector<Color> develop(double splatScale) const;
+
+  // Raw access (for I/O and the wire).
+  std::vector<RGBd>& pixelSums() { return pixelSum_; }
+  std::vector<double>& pixelCounts() { return pixelCount_; }
+  std::vector<RGBd>& splatSums() { return splatSum_; }
+  const std::vector<RGBd>& pixelSums() const { return pixelSum_; }
+  const std::vector<double>& pixelCounts() const { return pixelCount_; }
+  const std::vector<RGBd>& splatSums() const { return splatSum_; }
+  uint64_t nonFiniteSamples() const { return nonFinite_; }
+  void setNonFiniteSamples(uint64_t n) { nonFinite_ = n; }
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<RGBd> pixelSum_;
+  std::vector<double> pixelCount_;
+  std::vector<RGBd> splatSum_;
+  uint64_t nonFinite_ = 0;
+};
+
+}  // namespace mlt

@@ -1,0 +1,64 @@
+// BSDF interface. Directions are in the local shading frame (z = shading normal), both pointing away
+// from the surface: wo toward the previous vertex (the camera side for radiance transport), wi the
+// sampled one. Values f exclude the cosine factor.
+//
+// Transport mode: radiance (paths traced from the camera) or importance (traced from lights). The only
+// BSDF-level difference is refraction's 1/eta^2 radiance scaling (Veach 1997, sec. 5.2), applied in
+// Radiance mode only. The shading-normal correction for importance transport (Veach 1997, eq. 5.19)
+// depends on the geometric normal and is applied by the integrators (see shadingNormalCorrection).
+#pragma once
+#include <memory>
+#include <optional>
+
+#include "common/core/color.h"
+#include "common/core/vec.h"
+
+namespace mlt {
+
+enum class TransportMode { Radiance, Importance };
+
+struct BsdfSample {
+  Vec3 wi;
+  Color f;            // BSDF value for (wo, wi); for a delta component the weight such that f*|cos|/pdfW is the throughput
+  float pdfW = 0;     // solid-angle density of wi given wo (component choice included); for delta: the discrete probability
+  float pdfRevW = 0;  // density of sampling wo given wi (needed by BDPT's MIS)
+  bool delta = false; // sampled from a Dirac component
+  float eta = 1;      // relative IOR crossed (1 for reflection)
+};
+
+// Evaluation context: the texture coordinate is all a BSDF may look at besides directions.
+struct BsdfQuery {
+  Vec2 uv;
+  TransportMode mode = TransportMode::Radiance;
+};
+
+class Bsdf {
+ public:
+  virtual ~Bsdf() = default;
+  // f(wo, wi) of the non-delta components; 0 when only delta components could connect the two.
+  virtual Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const = 0;
+  // Solid-angle density with which sample() produces wi given wo, non-delta components only
+  // (including the probability of choosing those components).
+  virtual float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const = 0;
+  // Consumes exactly kBsdfDims - 1 = 3 numbers: uComponent then uDir (2D). nullopt = absorbed.
+  virtual std::optional<BsdfSample> sample(const Vec3& wo, float uComponent, Vec2 uDir, const BsdfQuery& q) const = 0;
+  // True if every component is a Dirac delta (mirror, glass): such a vertex cannot be connected to.
+  virtual bool isDelta() const = 0;
+  // Hemispherical albedo estimate for the given wo, used for Russian roulette hints only.
+  virtual Color albedo(const Vec2& uv) const = 0;
+};
+
+// Shading-normal correction for importance transport (Veach 1997, eq. 5.19):
+// |wo . ns| |wi . ng| / (|wo . ng| |wi . ns|), all in world space.
+inline float shadingNormalCorrection(const Vec3& woW, const Vec3& wiW, const Vec3& ng, const Vec3& ns) {
+  const float num = std::fabs(dot(woW, ns)) * std::fabs(dot(wiW, ng));
+  const float den = std::fabs(dot(woW, ng)) * std::fabs(dot(wiW, ns));
+  return den > 0 ? num / den : 0.0f;
+}
+
+struct BsdfDesc;
+struct SceneDesc;
+// Builds the BSDF for a description (textures loaded here). Throws std::runtime_error naming desc.id.
+std::unique_ptr<Bsdf> makeBsdf(const SceneDesc& scene, const BsdfDesc& desc);
+
+}  // namespace mlt

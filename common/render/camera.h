@@ -1,0 +1,54 @@
+// Cameras: pinhole perspective and thin lens. Importance We is normalized over the whole film
+// (pbrt-v3 convention): the film plane at distance 1 has area A, and We = 1 / (A * lensArea * cos^4(theta))
+// for a direction inside the film frustum. A pixel's measurement is then P * E[...] where P is the
+// pixel count; film development applies that factor (see film/film.h), never the camera.
+#pragma once
+#include <memory>
+#include <optional>
+
+#include "common/core/color.h"
+#include "common/core/vec.h"
+#include "common/render/interaction.h"
+
+namespace mlt {
+
+struct CameraRay {
+  Ray ray;               // unit direction
+  Vec3 n;                // camera forward axis (the "normal" of the lens)
+};
+
+struct CameraWiSample {  // BDPT t=1 / light tracing: connect a point to the lens
+  Color We;              // importance arriving at the lens from ref
+  Vec3 wi;               // unit, from ref toward the lens point
+  Vec3 pLens;
+  Vec3 nLens;            // camera forward axis
+  float pdfW = 0;        // solid-angle density at ref of choosing pLens (1 for a pinhole = delta position)
+  Vec2 pRaster;          // where the path lands on the film, in pixels ([0,W) x [0,H))
+};
+
+class Camera {
+ public:
+  virtual ~Camera() = default;
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // pRaster in pixels, (0,0) = top-left corner of the film; uLens in [0,1)^2. Consumes nothing itself.
+  virtual CameraRay generateRay(Vec2 pRaster, Vec2 uLens) const = 0;
+  // Importance for a ray leaving the lens at ray.o in direction ray.d; sets *pRaster if the ray hits the
+  // film. Zero outside the frustum.
+  virtual Color We(const Ray& ray, Vec2* pRaster) const = 0;
+  // pdfPos (area on the lens; 1 for a pinhole) and pdfDir (solid angle) of a generated ray.
+  virtual void pdfWe(const Ray& ray, float* pdfPos, float* pdfDir) const = 0;
+  // Consumes 2 numbers (uLens); nullopt if ref is not visible on the film.
+  virtual std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 uLens) const = 0;
+  // Raster position of a world point, if it lands on the film (pinhole projection through the lens center).
+  virtual std::optional<Vec2> rasterPosition(const Vec3& p) const = 0;
+  virtual bool deltaPosition() const = 0;  // pinhole
+
+ protected:
+  int width_ = 0, height_ = 0;
+};
+
+struct CameraDesc;
+std::unique_ptr<Camera> makeCamera(const CameraDesc& desc);
+
+}  // namespace mlt

@@ -1,0 +1,79 @@
+// Emitters: area lights on meshes, point, spot, directional and constant (environment) lights.
+// Densities carry their measure: pdfA (area, on the light), pdfW (solid angle), and for lights with a
+// delta position or direction the "pdf" of the delta part is 1 and the flag says so.
+#pragma once
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/core/vec.h"
+#include "common/render/interaction.h"
+
+namespace mlt {
+
+struct LightLiSample {     // next-event estimation: a point on the light as seen from a reference point
+  Color L;                 // radiance arriving at the reference point along -wi (no visibility)
+  Vec3 wi;                 // unit direction from the reference point toward the light
+  Vec3 pLight;             // point on the light (for infinite lights: ref + wi * 2 * sceneRadius)
+  Vec3 nLight;             // light surface normal at pLight (zero for point/spot; -wi for infinite)
+  float pdfW = 0;          // solid-angle density of wi at the reference point (1 for delta lights)
+  float pdfA = 0;          // area density of pLight (1 for delta position); for infinite lights: pdfW
+  bool deltaPosition = false;
+  bool infinite = false;
+};
+
+struct LightLeSample {     // emission: a ray leaving the light (light subpath start)
+  Color L;                 // emitted radiance along the ray (intensity for point/spot)
+  Ray ray;
+  Vec3 nLight;             // zero for point/spot
+  float pdfPos = 0;        // pdfA of the origin (1 for delta position; for infinite lights the pdf of the
+                           // point on the disk perpendicular to the direction, 1 / (pi R^2))
+  float pdfDir = 0;        // pdfW of the direction (1 for delta direction)
+};
+
+class Light {
+ public:
+  virtual ~Light() = default;
+  // Called once after the scene is built; infinite lights need the scene's bounding sphere.
+  virtual void preprocess(const Vec3& sceneCenter, float sceneRadius) { (void)sceneCenter; (void)sceneRadius; }
+  // Consumes 2 numbers.
+  virtual std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const = 0;
+  // Solid-angle density with which sampleLi(ref) picks direction wi hitting pLight with normal nLight.
+  virtual float pdfLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight, const Vec3& wi) const = 0;
+  // Consumes 4 numbers: uPos (2), uDir (2).
+  virtual std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const = 0;
+  // Densities of an emitted ray leaving pLight (normal nLight) in direction w.
+  virtual void pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const = 0;
+  // Area lights: radiance leaving a point with normal n in direction w (0 on the back side).
+  virtual Color L(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& w) const {
+    (void)p; (void)n; (void)uv; (void)w; return {};
+  }
+  // Infinite lights: radiance arriving along a ray that left the scene in direction d.
+  virtual Color Le(const Vec3& d) const { (void)d; return {}; }
+  virtual Color power() const = 0;   // total emitted power (W), for light selection
+  virtual bool deltaPosition() const { return false; }
+  virtual bool deltaDirection() const { return false; }
+  virtual bool infinite() const { return false; }
+};
+
+struct LightDesc;
+struct MeshDesc;
+std::unique_ptr<Light> makeLight(const LightDesc& desc);
+// An area light over every triangle of the mesh (uniform by area), emitting desc.emission on the front.
+std::unique_ptr<Light> makeAreaLight(const MeshDesc& mesh);
+
+// Picks a light in proportion to its power (alias-free: a CDF over lights; a handful of lights).
+class LightSampler {
+ public:
+  explicit LightSampler(const std::vector<const Light*>& lights);
+  // Consumes 1 number. Returns the light index and its probability; -1 if there are no lights.
+  int sample(float u, float* pmf) const;
+  float pmf(int lightIndex) const;
+  size_t size() const { return pmf_.size(); }
+
+ private:
+  std::vector<float> pmf_, cdf_;
+};
+
+}  // namespace mlt

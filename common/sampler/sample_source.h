@@ -1,0 +1,89 @@
+// The primary-sample vector: every random decision a path evaluator makes reads a number in [0,1)
+// from a SampleSource. Changing the source changes the method:
+//   IndependentSource  - fresh numbers (pt/lt/bdpt, bootstrap candidates), random access by hashing
+//   KelemenSource      - a Markov chain over the vector (common/mlt/kelemen_source.h)
+//   ReplaySource       - a fixed vector (tests, debugging)
+//
+// ---- Dimension map (the one place it is documented) -------------------------------------------
+// Coordinates live in separate streams so that a change of path length does not change the meaning of
+// other coordinates (Hachisuka et al. 2014, sec. 4; pbrt-v3 MLTSampler):
+//   Stream::Camera  : [0,1] raster position on the film (in [0,1)^2, scaled by the film size)
+//                     [2,3] lens position
+//                     then per camera-subpath bounce i (i = 0, 1, ...): kBsdfDims numbers
+//                       [0] component choice, [1,2] direction, [3] Russian roulette
+//   Stream::Light   : [0] light choice, [1,2] position on the light, [3,4] emitted direction
+//                     then per light-subpath bounce: kBsdfDims numbers as above
+//   Stream::Connect : technique-level choices: pt next-event estimation per bounce
+//                     ([0] light choice, [1,2] point on light; kNeeDims per bounce),
+//                     MMLT's (s,t) technique choice, bdpt's s=1 light resampling.
+// A fixed block size per vertex is what lets a reversible-jump chain rewrite vertex i alone.
+// -----------------------------------------------------------------------------------------------
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "common/core/rng.h"
+#include "common/core/vec.h"
+
+namespace mlt {
+
+enum class Stream : int { Camera = 0, Light = 1, Connect = 2 };
+constexpr int kNumStreams = 3;
+constexpr int kCameraDims = 4;  // raster (2) + lens (2)
+constexpr int kLightDims = 5;   // choice (1) + position (2) + direction (2)
+constexpr int kBsdfDims = 4;    // component (1) + direction (2) + roulette (1)
+constexpr int kNeeDims = 3;     // light choice (1) + position (2)
+
+class SampleSource {
+ public:
+  virtual ~SampleSource() = default;
+  // Subsequent next1D() calls read coordinates 0, 1, 2, ... of the given stream.
+  virtual void startStream(Stream s) = 0;
+  // Jump to coordinate `index` of the current stream (used to read a vertex's fixed block).
+  virtual void seek(int index) = 0;
+  virtual float next1D() = 0;
+  Vec2 next2D() {
+    const float a = next1D();
+    return {a, next1D()};
+  }
+};
+
+// Fresh uniform numbers. Coordinate j of stream s is hashUniform(seed, index, s, j): a pure function,
+// so a bootstrap candidate (seed = job seed, index = candidate index) can be replayed exactly by a
+// worker, and coordinates may be read in any order.
+class IndependentSource final : public SampleSource {
+ public:
+  IndependentSource(uint64_t seed, uint64_t index) : seed_(seed), index_(index) {}
+  void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; }
+  void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
+  void seek(int index) override { next_ = index; }
+  float next1D() override { return valueAt(stream_, next_++); }
+  float valueAt(int stream, int coordinate) const {
+    return hashUniform(seed_, index_, static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate));
+  }
+
+ private:
+  uint64_t seed_, index_;
+  int stream_ = 0, next_ = 0;
+};
+
+// A fixed vector per stream; reads past the end return `fill`. For tests and for replaying a path.
+class ReplaySource final : public SampleSource {
+ public:
+  explicit ReplaySource(std::vector<std::vector<float>> streams, float fill = 0.5f)
+      : streams_(std::move(streams)), fill_(fill) { streams_.resize(kNumStreams); }
+  void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
+  void seek(int index) override { next_ = index; }
+  float next1D() override {
+    const auto& v = streams_[stream_];
+    const int i = next_++;
+    return i < static_cast<int>(v.size()) ? v[i] : fill_;
+  }
+
+ private:
+  std::vector<std::vector<float>> streams_;
+  float fill_;
+  int stream_ = 0, next_ = 0;
+};
+
+}  // namespace mlt
