@@ -1,0 +1,85 @@
+// Film buffers: box filter of one pixel, raw double sums, development with one scale (see film.h).
+#include "common/film/film.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mlt {
+
+namespace {
+
+// Index of the pixel containing pRaster, or -1 when it lies off the film (or is not a number).
+long pixelIndex(Vec2 pRaster, int width, int height) {
+  const float fx = std::floor(pRaster.x), fy = std::floor(pRaster.y);
+  // Written so that NaN coordinates fail the test too.
+  if (!(fx >= 0.f && fy >= 0.f && fx < float(width) && fy < float(height))) return -1;
+  const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+  if (x >= width || y >= height) return -1;  // guard against float rounding at the far edge
+  return long(y) * width + x;
+}
+
+}  // namespace
+
+Film::Film(int width, int height) : width_(width), height_(height) {
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("Film: size must be positive, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  pixelSum_.assign(pixelCount(), RGBd{});
+  pixelCount_.assign(pixelCount(), 0.0);
+  splatSum_.assign(pixelCount(), RGBd{});
+}
+
+void Film::addSample(Vec2 pRaster, const Color& L) {
+  if (!L.isFinite()) {
+    ++nonFinite_;
+    return;
+  }
+  const long i = pixelIndex(pRaster, width_, height_);
+  if (i < 0) return;
+  pixelSum_[i].add(L);
+  pixelCount_[i] += 1.0;
+}
+
+void Film::addSplat(Vec2 pRaster, const Color& v) {
+  if (!v.isFinite()) {
+    ++nonFinite_;
+    return;
+  }
+  const long i = pixelIndex(pRaster, width_, height_);
+  if (i < 0) return;
+  splatSum_[i].add(v);
+}
+
+void Film::merge(const Film& other) {
+  if (other.width_ != width_ || other.height_ != height_)
+    throw std::invalid_argument("Film::merge: size mismatch " + std::to_string(width_) + "x" +
+                                std::to_string(height_) + " vs " + std::to_string(other.width_) + "x" +
+                                std::to_string(other.height_));
+  for (size_t i = 0; i < pixelSum_.size(); ++i) {
+    pixelSum_[i] += other.pixelSum_[i];
+    pixelCount_[i] += other.pixelCount_[i];
+    splatSum_[i] += other.splatSum_[i];
+  }
+  nonFinite_ += other.nonFinite_;
+}
+
+std::vector<Color> Film::develop(double splatScale) const {
+  std::vector<Color> out(pixelCount());
+  for (size_t i = 0; i < out.size(); ++i) {
+    double r = 0, g = 0, b = 0;
+    if (pixelCount_[i] > 0) {
+      const double inv = 1.0 / pixelCount_[i];
+      r = pixelSum_[i].r * inv;
+      g = pixelSum_[i].g * inv;
+      b = pixelSum_[i].b * inv;
+    }
+    r += splatScale * splatSum_[i].r;
+    g += splatScale * splatSum_[i].g;
+    b += splatScale * splatSum_[i].b;
+    out[i] = Color(static_cast<float>(r), static_cast<float>(g), static_cast<float>(b));
+  }
+  return out;
+}
+
+}  // namespace mlt

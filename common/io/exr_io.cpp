@@ -1,0 +1,298 @@
+// OpenEXR reading and writing (see exr_io.h for the file layouts).
+#include "common/io/exr_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfDoubleAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfTestFile.h>
+
+#include <bit>
+#include <cstdint>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+namespace mlt {
+
+namespace {
+
+constexpr const char* kFormatAttr = "mltfarm.format";
+constexpr const char* kFormatVersionAttr = "mltfarm.formatVersion";
+constexpr const char* kNonFiniteAttr = "mltfarm.nonFiniteSamples";
+constexpr const char* kPartialFilmFormat = "partial-film";
+constexpr int kPartialFilmVersion = 1;
+
+// Attribute names OpenEXR itself gives a meaning to; metadata may not use them.
+const std::set<std::string>& reservedNames() {
+  static const std::set<std::string> names = {
+      "channels", "compression", "dataWindow", "displayWindow", "lineOrder", "pixelAspectRatio",
+      "screenWindowCenter", "screenWindowWidth", "tiles", "view", "name", "type", "version",
+      "chunkCount", "maxSamplesPerPixel", "multiView"};
+  return names;
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw std::runtime_error(path + ": " + what);
+}
+
+void addMetadata(const std::string& path, Imf::Header& header, const ImageMetadata& m) {
+  for (const auto& [key, value] : m.strings) {
+    if (key.empty() || reservedNames().count(key) || key.rfind("mltfarm.", 0) == 0)
+      fail(path, "metadata key '" + key + "' is reserved or empty");
+    header.insert(key, Imf::StringAttribute(value));
+  }
+  for (const auto& [key, value] : m.numbers) {
+    if (key.empty() || reservedNames().count(key) || key.rfind("mltfarm.", 0) == 0)
+      fail(path, "metadata key '" + key + "' is reserved or empty");
+    if (m.strings.count(key)) fail(path, "metadata key '" + key + "' is both a string and a number");
+    header.insert(key, Imf::DoubleAttribute(value));
+  }
+}
+
+// Every string/number attribute except OpenEXR's own and (unless keepInternal) the mltfarm.* ones.
+ImageMetadata readMetadata(const Imf::Header& header, bool keepInternal) {
+  ImageMetadata m;
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    const std::string name = it.name();
+    if (reservedNames().count(name)) continue;
+    if (!keepInternal && name.rfind("mltfarm.", 0) == 0) continue;
+    const Imf::Attribute& a = it.attribute();
+    if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&a)) m.strings[name] = s->value();
+    else if (auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a)) m.numbers[name] = d->value();
+    else if (auto* f = dynamic_cast<const Imf::FloatAttribute*>(&a)) m.numbers[name] = f->value();
+    else if (auto* i = dynamic_cast<const Imf::IntAttribute*>(&a)) m.numbers[name] = i->value();
+  }
+  return m;
+}
+
+// Checks existence and the magic number so the common mistakes get a clear message.
+void checkReadable(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an EXR file");
+  bool tiled = false, deep = false, multiPart = false;
+  if (!Imf::isOpenExrFile(path.c_str(), tiled, deep, multiPart)) fail(path, "not an OpenEXR file");
+  if (deep) fail(path, "deep EXR files are not supported");
+}
+
+struct Size {
+  int width, height;
+  Imath::Box2i dw;
+};
+
+Size imageSize(const std::string& path, const Imf::Header& header) {
+  const Imath::Box2i dw = header.dataWindow();
+  const long w = long(dw.max.x) - dw.min.x + 1, h = long(dw.max.y) - dw.min.y + 1;
+  if (w <= 0 || h <= 0 || w * h > (1L << 31)) fail(path, "invalid data window");
+  return {int(w), int(h), dw};
+}
+
+// Pointer such that base + x * xStride + y * yStride addresses element (x - dw.min.x, y - dw.min.y).
+template <typename T>
+char* slicesBase(T* data, const Size& s, size_t xStride) {
+  return reinterpret_cast<char*>(data) - (ptrdiff_t(s.dw.min.x) + ptrdiff_t(s.dw.min.y) * s.width) * ptrdiff_t(xStride);
+}
+
+void writeFloatRgb(Imf::Header& header, Imf::FrameBuffer& fb, const std::vector<Color>& rgb, int width) {
+  const char* names[3] = {"R", "G", "B"};
+  for (int c = 0; c < 3; ++c) {
+    header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+    char* base = const_cast<char*>(reinterpret_cast<const char*>(rgb.data())) + c * sizeof(float);
+    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(Color), sizeof(Color) * size_t(width)));
+  }
+}
+
+}  // namespace
+
+// ---- Developed images ------------------------------------------------------------------------------
+
+void writeExr(const std::string& path, int width, int height, const std::vector<Color>& rgb,
+              const ImageMetadata& metadata) {
+  if (width <= 0 || height <= 0) fail(path, "cannot write an empty image");
+  if (rgb.size() != size_t(width) * size_t(height))
+    fail(path, "pixel count " + std::to_string(rgb.size()) + " does not match " + std::to_string(width) +
+                   "x" + std::to_string(height));
+  static_assert(sizeof(Color) == 3 * sizeof(float));
+  Imf::Header header(width, height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  addMetadata(path, header, metadata);
+  Imf::FrameBuffer fb;
+  writeFloatRgb(header, fb, rgb, width);
+  try {
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(height);
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot write EXR: ") + e.what());
+  }
+}
+
+ExrImage readExr(const std::string& path) {
+  checkReadable(path);
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Size s = imageSize(path, header);
+    ExrImage img;
+    img.width = s.width;
+    img.height = s.height;
+    img.rgb.assign(size_t(s.width) * size_t(s.height), Color());
+    img.metadata = readMetadata(header, false);
+    Imf::FrameBuffer fb;
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) {
+      if (!header.channels().findChannel(names[c])) fail(path, std::string("missing channel ") + names[c]);
+      char* base = slicesBase(img.rgb.data(), s, sizeof(Color)) + c * sizeof(float);
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(Color), sizeof(Color) * size_t(s.width)));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(s.dw.min.y, s.dw.max.y);
+    return img;
+  } catch (const std::runtime_error& e) {
+    if (std::string(e.what()).rfind(path + ":", 0) == 0) throw;
+    fail(path, std::string("cannot read EXR: ") + e.what());
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot read EXR: ") + e.what());
+  }
+}
+
+// ---- Partial films ---------------------------------------------------------------------------------
+
+namespace {
+
+// The raw doubles of a film as (channel base name, pointer to the first double, stride in doubles).
+struct DoubleField {
+  std::string name;
+  size_t offset;  // index of the component inside the element
+  size_t stride;  // doubles per element
+};
+
+const std::vector<DoubleField>& filmFields() {
+  static const std::vector<DoubleField> fields = {
+      {"pixel.R", 0, 3}, {"pixel.G", 1, 3}, {"pixel.B", 2, 3}, {"count", 0, 1},
+      {"splat.R", 0, 3}, {"splat.G", 1, 3}, {"splat.B", 2, 3}};
+  return fields;
+}
+
+// Element 0 of each field as a flat double array: the pixel sums, counts and splat sums.
+const double* fieldData(const Film& film, size_t field) {
+  static_assert(sizeof(RGBd) == 3 * sizeof(double));
+  if (field < 3) return reinterpret_cast<const double*>(film.pixelSums().data());
+  if (field == 3) return film.pixelCounts().data();
+  return reinterpret_cast<const double*>(film.splatSums().data());
+}
+
+}  // namespace
+
+void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
+                  double previewSplatScale) {
+  const int width = film.width(), height = film.height();
+  if (width <= 0 || height <= 0) fail(path, "cannot write an empty film");
+  const size_t n = film.pixelCount();
+  Imf::Header header(width, height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  addMetadata(path, header, metadata);
+  header.insert(kFormatAttr, Imf::StringAttribute(kPartialFilmFormat));
+  header.insert(kFormatVersionAttr, Imf::IntAttribute(kPartialFilmVersion));
+  header.insert(kNonFiniteAttr, Imf::DoubleAttribute(double(film.nonFiniteSamples())));
+
+  Imf::FrameBuffer fb;
+  const std::vector<Color> preview = film.develop(previewSplatScale);
+  writeFloatRgb(header, fb, preview, width);
+
+  // hi/lo words of every double, one plane per channel.
+  const auto& fields = filmFields();
+  std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
+  for (size_t f = 0; f < fields.size(); ++f) {
+    const double* data = fieldData(film, f);
+    for (size_t i = 0; i < n; ++i) {
+      const uint64_t bits = std::bit_cast<uint64_t>(data[i * fields[f].stride + fields[f].offset]);
+      words[2 * f][i] = uint32_t(bits >> 32);
+      words[2 * f + 1][i] = uint32_t(bits);
+    }
+    for (int half = 0; half < 2; ++half) {
+      const std::string name = fields[f].name + (half == 0 ? ".hi" : ".lo");
+      header.channels().insert(name, Imf::Channel(Imf::UINT));
+      fb.insert(name, Imf::Slice(Imf::UINT, reinterpret_cast<char*>(words[2 * f + half].data()),
+                                 sizeof(uint32_t), sizeof(uint32_t) * size_t(width)));
+    }
+  }
+  try {
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(height);
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot write EXR: ") + e.what());
+  }
+}
+
+bool isFilmExr(const std::string& path) {
+  try {
+    checkReadable(path);
+    Imf::InputFile file(path.c_str());
+    const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>(kFormatAttr);
+    return a && a->value() == kPartialFilmFormat;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+FilmExr readFilmExr(const std::string& path) {
+  checkReadable(path);
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const auto* format = header.findTypedAttribute<Imf::StringAttribute>(kFormatAttr);
+    if (!format || format->value() != kPartialFilmFormat)
+      fail(path, "not a partial film EXR (missing header attribute mltfarm.format = partial-film)");
+    const auto* version = header.findTypedAttribute<Imf::IntAttribute>(kFormatVersionAttr);
+    if (!version || version->value() != kPartialFilmVersion)
+      fail(path, "unsupported partial film format version (expected " + std::to_string(kPartialFilmVersion) + ")");
+    const Size s = imageSize(path, header);
+    if (header.displayWindow() != s.dw)
+      fail(path, "size mismatch: data window differs from display window");
+
+    const size_t n = size_t(s.width) * size_t(s.height);
+    const auto& fields = filmFields();
+    std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
+    Imf::FrameBuffer fb;
+    for (size_t f = 0; f < fields.size(); ++f) {
+      for (int half = 0; half < 2; ++half) {
+        const std::string name = fields[f].name + (half == 0 ? ".hi" : ".lo");
+        const Imf::Channel* ch = header.channels().findChannel(name);
+        if (!ch) fail(path, "missing channel " + name);
+        if (ch->type != Imf::UINT) fail(path, "channel " + name + " is not of type UINT");
+        if (ch->xSampling != 1 || ch->ySampling != 1) fail(path, "channel " + name + " is subsampled");
+        fb.insert(name, Imf::Slice(Imf::UINT, slicesBase(words[2 * f + half].data(), s, sizeof(uint32_t)),
+                                   sizeof(uint32_t), sizeof(uint32_t) * size_t(s.width)));
+      }
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(s.dw.min.y, s.dw.max.y);
+
+    FilmExr out{Film(s.width, s.height), readMetadata(header, false)};
+    for (size_t f = 0; f < fields.size(); ++f) {
+      double* data = const_cast<double*>(fieldData(out.film, f));
+      for (size_t i = 0; i < n; ++i) {
+        const uint64_t bits = (uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i];
+        data[i * fields[f].stride + fields[f].offset] = std::bit_cast<double>(bits);
+      }
+    }
+    if (const auto* nf = header.findTypedAttribute<Imf::DoubleAttribute>(kNonFiniteAttr))
+      out.film.setNonFiniteSamples(uint64_t(nf->value()));
+    return out;
+  } catch (const std::runtime_error& e) {
+    if (std::string(e.what()).rfind(path + ":", 0) == 0) throw;
+    fail(path, std::string("cannot read EXR: ") + e.what());
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot read EXR: ") + e.what());
+  }
+}
+
+}  // namespace mlt

@@ -1,0 +1,53 @@
+// OpenEXR I/O, the only place OpenEXR is used.
+//  - writeExr / readExr: a developed linear RGB image (FLOAT R, G, B; ZIP) with header metadata.
+//  - writeFilmExr / readFilmExr: a *partial* film for exact offline merging. Every raw double sum is kept
+//    bit-exactly as two UINT channels holding the high and low 32 bits of its IEEE-754 bit pattern:
+//      pixel.{R,G,B}.{hi,lo}   weighted pixel sums        (Film::pixelSums)
+//      count.{hi,lo}           pixel sample counts        (Film::pixelCounts)
+//      splat.{R,G,B}.{hi,lo}   splat sums                 (Film::splatSums)
+//    plus FLOAT R, G, B: a developed preview (Film::develop(previewSplatScale)), so any EXR viewer shows
+//    something sensible. The header carries the caller's metadata plus `mltfarm.format` ("partial-film")
+//    and `mltfarm.formatVersion`, and the film's non-finite sample count.
+// Metadata: strings become StringAttributes, numbers DoubleAttributes (OpenEXR has no 64-bit integer
+// attribute; counts up to 2^53 are exact in a double). Reading returns every string and double attribute
+// (int and float attributes are returned as numbers). Errors are std::runtime_error naming the file.
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/film/film.h"
+
+namespace mlt {
+
+struct ImageMetadata {
+  std::map<std::string, std::string> strings;
+  std::map<std::string, double> numbers;
+  bool operator==(const ImageMetadata&) const = default;
+};
+
+struct ExrImage {
+  int width = 0, height = 0;
+  std::vector<Color> rgb;  // row-major from the top-left
+  ImageMetadata metadata;
+};
+
+void writeExr(const std::string& path, int width, int height, const std::vector<Color>& rgb,
+              const ImageMetadata& metadata);
+ExrImage readExr(const std::string& path);
+
+struct FilmExr {
+  Film film;
+  ImageMetadata metadata;  // without the mltfarm.* bookkeeping attributes
+};
+
+// previewSplatScale: the scale passed to Film::develop for the FLOAT preview channels only; the raw
+// sums are stored unscaled.
+void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
+                  double previewSplatScale);
+FilmExr readFilmExr(const std::string& path);
+// True if the file is an EXR written by writeFilmExr (cheap: reads the header only).
+bool isFilmExr(const std::string& path);
+
+}  // namespace mlt

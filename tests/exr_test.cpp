@@ -1,0 +1,212 @@
+// EXR and PNG I/O: developed images round-trip float-exactly with metadata; partial films round-trip
+// bit-exactly (every double, including ones a float could not hold); clear errors naming the file.
+#include "common/io/exr_io.h"
+#include "common/io/png_io.h"
+
+#include <gtest/gtest.h>
+#include <png.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIntAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+
+#include <functional>
+
+#include <bit>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "common/core/rng.h"
+
+namespace mlt {
+namespace {
+
+std::string tempPath(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "mltfarm_exr_test";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Exr, DevelopedImageRoundTripIsFloatExact) {
+  const int w = 17, h = 5;
+  std::vector<Color> rgb(w * h);
+  Pcg32 rng(7, 1);
+  for (Color& c : rgb) c = Color(rng.uniform() * 1e4f, rng.uniform() * 1e-6f, rng.uniform() - 0.5f);
+  ImageMetadata meta;
+  meta.strings["method"] = "bdpt";
+  meta.strings["sceneHash"] = "abc123";
+  meta.numbers["spp"] = 64;
+  meta.numbers["seed"] = 9007199254740992.0;  // 2^53: counts survive as doubles
+  meta.numbers["b"] = 0.123456789012345678;
+  const std::string path = tempPath("developed.exr");
+  writeExr(path, w, h, rgb, meta);
+  const ExrImage img = readExr(path);
+  EXPECT_EQ(img.width, w);
+  EXPECT_EQ(img.height, h);
+  ASSERT_EQ(img.rgb.size(), rgb.size());
+  for (size_t i = 0; i < rgb.size(); ++i)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(std::bit_cast<uint32_t>(img.rgb[i][c]), std::bit_cast<uint32_t>(rgb[i][c]));
+  EXPECT_EQ(img.metadata, meta);
+}
+
+TEST(Exr, PartialFilmRoundTripIsBitExact) {
+  Film film(9, 4);
+  Pcg32 rng(11, 3);
+  for (int i = 0; i < 500; ++i) {
+    const Vec2 p(rng.uniform() * 9, rng.uniform() * 4);
+    // Values that need every bit of a double once summed.
+    film.addSample(p, Color(rng.uniform() * 1e-3f, rng.uniform() * 3.f, rng.uniform() * 1e5f));
+    film.addSplat(Vec2(rng.uniform() * 9, rng.uniform() * 4), Color(rng.uniform() / 3.f));
+  }
+  film.addSample({1, 1}, Color(std::numeric_limits<float>::quiet_NaN()));
+  film.pixelSums()[0].r = -0.0;
+  film.splatSums()[1].g = std::numeric_limits<double>::denorm_min();
+  film.splatSums()[2].b = 1.0 / 3.0;  // not representable as a float
+  ImageMetadata meta;
+  meta.strings["method"] = "pssmlt";
+  meta.strings["chains"] = "3,5,8";
+  meta.numbers["b"] = 1.0 / 7.0;
+  meta.numbers["mutations"] = 123456789012.0;
+  const std::string path = tempPath("partial.exr");
+  writeFilmExr(path, film, meta, 0.5);
+  ASSERT_TRUE(isFilmExr(path));
+  const FilmExr back = readFilmExr(path);
+  EXPECT_EQ(back.metadata, meta);
+  ASSERT_EQ(back.film.width(), 9);
+  ASSERT_EQ(back.film.height(), 4);
+  EXPECT_EQ(back.film.nonFiniteSamples(), 1u);
+  auto bits = [](double d) { return std::bit_cast<uint64_t>(d); };
+  for (size_t i = 0; i < film.pixelCount(); ++i) {
+    EXPECT_EQ(bits(back.film.pixelSums()[i].r), bits(film.pixelSums()[i].r)) << i;
+    EXPECT_EQ(bits(back.film.pixelSums()[i].g), bits(film.pixelSums()[i].g)) << i;
+    EXPECT_EQ(bits(back.film.pixelSums()[i].b), bits(film.pixelSums()[i].b)) << i;
+    EXPECT_EQ(bits(back.film.pixelCounts()[i]), bits(film.pixelCounts()[i])) << i;
+    EXPECT_EQ(bits(back.film.splatSums()[i].r), bits(film.splatSums()[i].r)) << i;
+    EXPECT_EQ(bits(back.film.splatSums()[i].g), bits(film.splatSums()[i].g)) << i;
+    EXPECT_EQ(bits(back.film.splatSums()[i].b), bits(film.splatSums()[i].b)) << i;
+  }
+  // The preview channels are the film developed with the given scale, readable as an ordinary EXR.
+  const ExrImage preview = readExr(path);
+  const std::vector<Color> expected = film.develop(0.5);
+  ASSERT_EQ(preview.rgb.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(preview.rgb[i].g, expected[i].g);
+}
+
+TEST(Exr, ErrorsNameTheFile) {
+  const std::string missing = tempPath("does_not_exist.exr");
+  std::filesystem::remove(missing);
+  std::string e = errorOf([&] { readExr(missing); });
+  EXPECT_NE(e.find(missing), std::string::npos) << e;
+  EXPECT_NE(e.find("no such file"), std::string::npos) << e;
+
+  const std::string text = tempPath("not_an_exr.exr");
+  std::ofstream(text) << "hello, I am not an image";
+  e = errorOf([&] { readFilmExr(text); });
+  EXPECT_NE(e.find(text), std::string::npos) << e;
+  EXPECT_NE(e.find("not an OpenEXR file"), std::string::npos) << e;
+
+  // A developed image is not a partial film.
+  const std::string developed = tempPath("developed_only.exr");
+  writeExr(developed, 2, 2, std::vector<Color>(4, Color(1)), {});
+  EXPECT_FALSE(isFilmExr(developed));
+  e = errorOf([&] { readFilmExr(developed); });
+  EXPECT_NE(e.find(developed), std::string::npos) << e;
+  EXPECT_NE(e.find("not a partial film"), std::string::npos) << e;
+
+  // Size mismatch between pixels and dimensions; reserved metadata keys.
+  e = errorOf([&] { writeExr(developed, 3, 2, std::vector<Color>(4), {}); });
+  EXPECT_NE(e.find(developed), std::string::npos) << e;
+  ImageMetadata reserved;
+  reserved.strings["compression"] = "none";
+  e = errorOf([&] { writeExr(developed, 2, 2, std::vector<Color>(4), reserved); });
+  EXPECT_NE(e.find("reserved"), std::string::npos) << e;
+}
+
+TEST(Exr, MissingOrBadChannelIsReported) {
+  // Hand-made files that carry the partial-film tag but lack a raw channel or have a wrong type.
+  auto writeTagged = [](const std::string& path, Imf::PixelType countLoType, bool withCountLo) {
+    Imf::Header header(2, 2);
+    header.insert("mltfarm.format", Imf::StringAttribute("partial-film"));
+    header.insert("mltfarm.formatVersion", Imf::IntAttribute(1));
+    std::vector<uint32_t> zeros(4, 0);
+    Imf::FrameBuffer fb;
+    for (const char* base : {"pixel.R", "pixel.G", "pixel.B", "count", "splat.R", "splat.G", "splat.B"}) {
+      for (const char* half : {".hi", ".lo"}) {
+        const std::string name = std::string(base) + half;
+        Imf::PixelType type = Imf::UINT;
+        if (name == "count.lo") {
+          if (!withCountLo) continue;
+          type = countLoType;
+        }
+        header.channels().insert(name, Imf::Channel(type));
+        fb.insert(name, Imf::Slice(type, reinterpret_cast<char*>(zeros.data()), 4, 8));  // 0 bits = 0.0f too
+      }
+    }
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(2);
+  };
+  const std::string good = tempPath("tagged_good.exr");
+  writeTagged(good, Imf::UINT, true);
+  EXPECT_NO_THROW(readFilmExr(good));
+
+  const std::string missing = tempPath("tagged_missing.exr");
+  writeTagged(missing, Imf::UINT, false);
+  std::string e = errorOf([&] { readFilmExr(missing); });
+  EXPECT_NE(e.find(missing), std::string::npos) << e;
+  EXPECT_NE(e.find("missing channel count.lo"), std::string::npos) << e;
+
+  const std::string wrongType = tempPath("tagged_float.exr");
+  writeTagged(wrongType, Imf::FLOAT, true);
+  e = errorOf([&] { readFilmExr(wrongType); });
+  EXPECT_NE(e.find("count.lo is not of type UINT"), std::string::npos) << e;
+
+  // A truncated file gives a clean error naming the file, not a crash.
+  Film film(64, 64);
+  film.addSplat({3, 3}, Color(1));
+  const std::string truncated = tempPath("partial_truncated.exr");
+  writeFilmExr(truncated, film, {}, 1.0);
+  std::filesystem::resize_file(truncated, std::filesystem::file_size(truncated) / 2);
+  e = errorOf([&] { readFilmExr(truncated); });
+  EXPECT_NE(e.find(truncated), std::string::npos) << e;
+}
+
+TEST(Png, WritesReadableFileOfTheRightSize) {
+  const int w = 7, h = 3;
+  std::vector<Color> rgb(w * h, Color(0.5f));
+  rgb[0] = Color(std::numeric_limits<float>::quiet_NaN(), 2.0f, -1.0f);
+  const std::string path = tempPath("preview.png");
+  writePng(path, w, h, rgb, 0.f);
+
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  ASSERT_TRUE(png_image_begin_read_from_file(&image, path.c_str())) << image.message;
+  EXPECT_EQ(image.width, unsigned(w));
+  EXPECT_EQ(image.height, unsigned(h));
+  image.format = PNG_FORMAT_RGB;
+  std::vector<uint8_t> pixels(PNG_IMAGE_SIZE(image));
+  ASSERT_TRUE(png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr)) << image.message;
+  EXPECT_EQ(pixels[0], 0);    // NaN -> 0
+  EXPECT_EQ(pixels[1], 255);  // clamped
+  EXPECT_EQ(pixels[2], 0);    // negative -> 0
+  EXPECT_EQ(pixels[3], 188);  // sRGB(0.5) = 0.7354 -> 188
+  // One stop of exposure doubles the linear value: 0.5 -> 1.0 -> 255.
+  EXPECT_EQ(toSrgb8(0.5f, std::exp2(1.f)), 255);
+  EXPECT_EQ(toSrgb8(0.0f, 1.f), 0);
+}
+
+}  // namespace
+}  // namespace mlt

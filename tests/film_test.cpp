@@ -1,0 +1,102 @@
+// Film: box filter bins, non-finite samples counted and dropped, merge = element-wise sum, develop scale.
+#include "common/film/film.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace mlt {
+namespace {
+
+TEST(Film, BoxFilterBinsByFloorOfRasterPosition) {
+  Film film(4, 3);
+  film.addSample({0.0f, 0.0f}, Color(1, 2, 3));
+  film.addSample({0.999f, 0.999f}, Color(1, 0, 0));  // still pixel (0,0)
+  film.addSample({1.0f, 0.0f}, Color(5));            // pixel (1,0)
+  film.addSample({3.5f, 2.5f}, Color(7));            // last pixel
+  EXPECT_EQ(film.pixelCounts()[0], 2.0);
+  EXPECT_EQ(film.pixelSums()[0].r, 2.0);
+  EXPECT_EQ(film.pixelSums()[0].g, 2.0);
+  EXPECT_EQ(film.pixelSums()[0].b, 3.0);
+  EXPECT_EQ(film.pixelCounts()[1], 1.0);
+  EXPECT_EQ(film.pixelSums()[1].g, 5.0);
+  EXPECT_EQ(film.pixelCounts()[11], 1.0);
+  EXPECT_EQ(film.pixelSums()[11].b, 7.0);
+  // Splats: same binning, separate buffer.
+  film.addSplat({2.2f, 1.7f}, Color(4));
+  EXPECT_EQ(film.splatSums()[1 * 4 + 2].r, 4.0);
+  EXPECT_EQ(film.pixelCounts()[1 * 4 + 2], 0.0);
+}
+
+TEST(Film, OffFilmSamplesAndSplatsAreIgnored) {
+  Film film(2, 2);
+  for (Vec2 p : {Vec2(-0.01f, 0.5f), Vec2(0.5f, -0.01f), Vec2(2.0f, 0.5f), Vec2(0.5f, 2.0f),
+                 Vec2(std::numeric_limits<float>::quiet_NaN(), 0.5f)}) {
+    film.addSample(p, Color(1));
+    film.addSplat(p, Color(1));
+  }
+  for (size_t i = 0; i < film.pixelCount(); ++i) {
+    EXPECT_EQ(film.pixelCounts()[i], 0.0);
+    EXPECT_EQ(film.pixelSums()[i].r, 0.0);
+    EXPECT_EQ(film.splatSums()[i].r, 0.0);
+  }
+  EXPECT_EQ(film.nonFiniteSamples(), 0u);
+}
+
+TEST(Film, NonFiniteValuesAreCountedAndDropped) {
+  Film film(2, 1);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  film.addSample({0.5f, 0.5f}, Color(nan, 0, 0));
+  film.addSample({0.5f, 0.5f}, Color(0, inf, 0));
+  film.addSplat({1.5f, 0.5f}, Color(0, 0, -inf));
+  film.addSample({0.5f, 0.5f}, Color(1));
+  EXPECT_EQ(film.nonFiniteSamples(), 3u);
+  EXPECT_EQ(film.pixelCounts()[0], 1.0);  // the dropped samples do not count
+  EXPECT_EQ(film.pixelSums()[0].r, 1.0);
+  EXPECT_EQ(film.splatSums()[1].b, 0.0);
+  for (const Color& c : film.develop(1.0)) EXPECT_TRUE(c.isFinite());
+}
+
+TEST(Film, MergeIsElementWiseSum) {
+  Film a(3, 2), b(3, 2);
+  a.addSample({0.5f, 0.5f}, Color(1, 2, 3));
+  a.addSplat({2.5f, 1.5f}, Color(0.25f));
+  b.addSample({0.5f, 0.5f}, Color(3, 2, 1));
+  b.addSample({1.5f, 1.5f}, Color(8));
+  b.addSplat({2.5f, 1.5f}, Color(0.5f));
+  b.addSample({0.5f, 0.5f}, Color(std::numeric_limits<float>::quiet_NaN()));
+  a.merge(b);
+  EXPECT_EQ(a.pixelCounts()[0], 2.0);
+  EXPECT_EQ(a.pixelSums()[0].r, 4.0);
+  EXPECT_EQ(a.pixelSums()[0].b, 4.0);
+  EXPECT_EQ(a.pixelCounts()[4], 1.0);
+  EXPECT_EQ(a.splatSums()[5].g, 0.75);
+  EXPECT_EQ(a.nonFiniteSamples(), 1u);
+  Film wrong(2, 3);
+  EXPECT_THROW(a.merge(wrong), std::invalid_argument);
+}
+
+TEST(Film, DevelopIsMeanPlusScaledSplats) {
+  Film film(2, 1);
+  film.addSample({0.5f, 0.5f}, Color(1, 2, 3));
+  film.addSample({0.5f, 0.5f}, Color(3, 2, 1));
+  film.addSplat({0.5f, 0.5f}, Color(4, 0, 0));
+  film.addSplat({1.5f, 0.5f}, Color(0, 8, 0));
+  const std::vector<Color> img = film.develop(0.25);
+  ASSERT_EQ(img.size(), 2u);
+  EXPECT_FLOAT_EQ(img[0].r, 2.0f + 1.0f);
+  EXPECT_FLOAT_EQ(img[0].g, 2.0f);
+  EXPECT_FLOAT_EQ(img[0].b, 2.0f);
+  // A pixel without samples develops to its splats alone (no division by a zero count).
+  EXPECT_FLOAT_EQ(img[1].r, 0.0f);
+  EXPECT_FLOAT_EQ(img[1].g, 2.0f);
+}
+
+TEST(Film, RejectsEmptySize) {
+  EXPECT_THROW(Film(0, 4), std::invalid_argument);
+  EXPECT_THROW(Film(4, -1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace mlt
