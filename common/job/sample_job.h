@@ -1,0 +1,26 @@
+// The sample-based half of the job API: pt, lt and bdpt as batches of independent pixel samples.
+//
+// Sample indexing (the same however the work is split or scheduled): sample k of pixel (x, y) reads the
+// primary samples IndependentSource(hashKeys(seed, y * width + x), k). A work unit holds samples
+// [sampleBegin, sampleEnd) of every pixel. For lt the pixel loop only defines that indexing: one light
+// path per (pixel, sample), all of its splats go to the splat buffer.
+#pragma once
+#include <vector>
+
+#include "common/job/render_job.h"
+
+namespace mlt {
+
+class PathEvaluator;
+
+// Units of samplesPerUnit spp each (the last one may be shorter). samplesPerUnit = 0 picks
+// ceil(spp / kAutoSampleUnits): a split that depends on spp only, never on the thread or worker count,
+// because the split decides the order of floating-point additions and so the image's bits.
+constexpr int kAutoSampleUnits = 16;
+JobPlan planSampleJob(const RenderSettings& settings);
+PartialResult runSampleUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
+// Same, with a caller-provided evaluator (tests; the farm's worker keeps one per job).
+PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit);
+std::vector<Color> developSampleImage(const JobPlan& plan, const PartialResult& merged);
+
+}  // namespace mlt
