@@ -13,9 +13,12 @@
 //                       [0] component choice, [1,2] direction, [3] Russian roulette
 //   Stream::Light   : [0] light choice, [1,2] position on the light, [3,4] emitted direction
 //                     then per light-subpath bounce: kBsdfDims numbers as above
-//   Stream::Connect : technique-level choices: pt next-event estimation per bounce
-//                     ([0] light choice, [1,2] point on light; kNeeDims per bounce),
-//                     MMLT's (s,t) technique choice, bdpt's s=1 light resampling.
+//   Stream::Connect : technique-level choices: [0] MMLT's (s,t) technique choice (kConnectTechniqueDim),
+//                     then one kNeeDims block per camera-subpath bounce i (i = 0: first surface hit) at
+//                     connectNeeOffset(i): [0] light choice, [1,2] point on light. Read by pt's
+//                     next-event estimation at bounce i and by bdpt's s=1 light resampling at camera
+//                     vertex i+1 (the same strategy, so pt and bdpt share those numbers).
+//                     bdpt's t=1 lens sample reuses Camera [2,3] (the lens position of the camera vertex).
 // A fixed block size per vertex is what lets a reversible-jump chain rewrite vertex i alone.
 // -----------------------------------------------------------------------------------------------
 #pragma once
@@ -33,6 +36,8 @@ constexpr int kCameraDims = 4;  // raster (2) + lens (2)
 constexpr int kLightDims = 5;   // choice (1) + position (2) + direction (2)
 constexpr int kBsdfDims = 4;    // component (1) + direction (2) + roulette (1)
 constexpr int kNeeDims = 3;     // light choice (1) + position (2)
+constexpr int kConnectTechniqueDim = 0;  // Connect stream: MMLT technique choice
+constexpr int connectNeeOffset(int bounce) { return 1 + bounce * kNeeDims; }
 
 class SampleSource {
  public:
