@@ -1,0 +1,164 @@
+// The job API's sample-based half with a stand-in path evaluator (the real ones are tested by the
+// integrators' tests): method names, PartialResult merging, plan splitting, thread-count independence,
+// and the light-tracing normalization P / N.
+#include "common/job/sample_job.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <bit>
+#include <cmath>
+
+#include "common/job/render_job.h"
+
+namespace mlt {
+namespace {
+
+// A deterministic stand-in: a camera sample worth (u0, u1, 1) (t = 2) and, with probability 1/2, a t = 1
+// splat of value 1 at a uniformly random film position (the second case lands anywhere on the film).
+class FakeEvaluator final : public PathEvaluator {
+ public:
+  FakeEvaluator(int w, int h) : w_(w), h_(h) {}
+  void evaluate(SampleSource& src, const Vec2* pixel, PathContribution& out) const override {
+    src.startStream(Stream::Camera);
+    const Vec2 u = src.next2D();
+    out.cameraRaster = Vec2(pixel->x + u.x, pixel->y + u.y);
+    out.splats.push_back({out.cameraRaster, Color(u.x, u.y, 1.f), 0, 2});
+    src.startStream(Stream::Light);
+    const float pick = src.next1D();
+    const Vec2 p = src.next2D();
+    if (pick < 0.5f) out.splats.push_back({Vec2(p.x * w_, p.y * h_), Color(1.f), 1, 1});
+  }
+
+ private:
+  int w_, h_;
+};
+
+RenderSettings settingsFor(Method m, int spp, int w, int h) {
+  RenderSettings s;
+  s.method = m;
+  s.spp = spp;
+  s.width = w;
+  s.height = h;
+  s.seed = 42;
+  return s;
+}
+
+void expectBitIdentical(const Film& a, const Film& b) {
+  ASSERT_EQ(a.pixelCount(), b.pixelCount());
+  auto bits = [](double d) { return std::bit_cast<uint64_t>(d); };
+  for (size_t i = 0; i < a.pixelCount(); ++i) {
+    ASSERT_EQ(bits(a.pixelSums()[i].r), bits(b.pixelSums()[i].r)) << i;
+    ASSERT_EQ(bits(a.pixelSums()[i].g), bits(b.pixelSums()[i].g)) << i;
+    ASSERT_EQ(bits(a.pixelCounts()[i]), bits(b.pixelCounts()[i])) << i;
+    ASSERT_EQ(bits(a.splatSums()[i].r), bits(b.splatSums()[i].r)) << i;
+  }
+}
+
+TEST(JobApi, MethodNamesRoundTrip) {
+  for (Method m : {Method::PT, Method::LT, Method::BDPT, Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT})
+    EXPECT_EQ(parseMethod(methodName(m)), m);
+  EXPECT_THROW(parseMethod("PT"), std::invalid_argument);
+  EXPECT_THROW(parseMethod("metropolis"), std::invalid_argument);
+  EXPECT_FALSE(isMarkovChainMethod(Method::BDPT));
+  EXPECT_TRUE(isMarkovChainMethod(Method::MMLT));
+}
+
+TEST(JobApi, PlanSplitsSamplesIntoUnitsCoveringEverySampleOnce) {
+  RenderSettings s = settingsFor(Method::PT, 37, 8, 8);
+  JobPlan auto_ = planSampleJob(s);
+  EXPECT_EQ(auto_.settings.samplesPerUnit, 3);  // ceil(37 / 16)
+  s.samplesPerUnit = 5;
+  const JobPlan plan = planSampleJob(s);
+  uint32_t next = 0;
+  for (size_t i = 0; i < plan.units.size(); ++i) {
+    EXPECT_EQ(plan.units[i].index, i);
+    EXPECT_EQ(plan.units[i].sampleBegin, next);
+    EXPECT_LE(plan.units[i].sampleEnd - plan.units[i].sampleBegin, 5u);
+    next = plan.units[i].sampleEnd;
+  }
+  EXPECT_EQ(next, 37u);
+  s.spp = 0;
+  EXPECT_THROW(planSampleJob(s), std::invalid_argument);
+}
+
+TEST(JobApi, PartialResultAddMergesAndRejectsDuplicates) {
+  RenderSettings s = settingsFor(Method::BDPT, 4, 20, 9);
+  s.samplesPerUnit = 1;
+  const JobPlan plan = planSampleJob(s);
+  const FakeEvaluator eval(20, 9);
+  std::vector<PartialResult> parts;
+  for (const WorkUnit& u : plan.units) parts.push_back(runSampleUnit(eval, plan, u));
+
+  PartialResult merged;
+  for (const PartialResult& p : parts) merged.add(p);
+  EXPECT_EQ(merged.units, (std::vector<uint32_t>{0, 1, 2, 3}));
+  EXPECT_EQ(merged.samples, 4u * 20 * 9);
+  for (size_t i = 0; i < merged.film.pixelCount(); ++i) EXPECT_EQ(merged.film.pixelCounts()[i], 4.0);
+
+  // The same units merged as pairs ((0+1) + (2+3)) in index order: the same units, same counts.
+  PartialResult a, b;
+  a.add(parts[0]);
+  a.add(parts[1]);
+  b.add(parts[2]);
+  b.add(parts[3]);
+  PartialResult pairs;
+  pairs.add(a);
+  pairs.add(b);
+  EXPECT_EQ(pairs.units, merged.units);
+  EXPECT_EQ(pairs.samples, merged.samples);
+
+  // A unit already included is rejected, and the result is left untouched.
+  const std::vector<Color> before = merged.film.develop(1.0);
+  EXPECT_THROW(merged.add(parts[2]), std::invalid_argument);
+  EXPECT_THROW(pairs.add(a), std::invalid_argument);
+  EXPECT_EQ(merged.samples, 4u * 20 * 9);
+  const std::vector<Color> after = merged.film.develop(1.0);
+  for (size_t i = 0; i < before.size(); ++i) EXPECT_EQ(before[i].r, after[i].r);
+}
+
+TEST(JobApi, SampleUnitIsBitIdenticalWhateverTheThreadCount) {
+  // 40x37: partial tiles at the edges and more than one tile group would need > 64 tiles, so also a
+  // wide film.
+  for (auto [w, h] : {std::pair{40, 37}, std::pair{300, 70}}) {
+    RenderSettings s = settingsFor(Method::BDPT, 3, w, h);
+    const JobPlan plan = planSampleJob(s);
+    const FakeEvaluator eval(w, h);
+    PartialResult one, two;
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+      for (const WorkUnit& u : plan.units) one.add(runSampleUnit(eval, plan, u));
+    }
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+      for (const WorkUnit& u : plan.units) two.add(runSampleUnit(eval, plan, u));
+    }
+    expectBitIdentical(one.film, two.film);
+  }
+}
+
+TEST(JobApi, SplatsAreNormalizedByPixelsOverLightPaths) {
+  // With lt every splat of the stand-in goes to the splat buffer, developed with scale P / N
+  // (N = spp * P light paths). Blue channel:
+  //  - the "camera" splat (blue 1) lands in its own pixel spp times: P / N * spp = 1 exactly per pixel;
+  //  - the random splats (blue 1, K ~ Binomial(N, 1/2) of them anywhere) add K / N to the image mean:
+  //    expectation 1/2, standard error sqrt(N / 4) / N.
+  const int w = 16, h = 16, spp = 64;
+  RenderSettings s = settingsFor(Method::LT, spp, w, h);
+  const JobPlan plan = planSampleJob(s);
+  const FakeEvaluator eval(w, h);
+  PartialResult merged;
+  for (const WorkUnit& u : plan.units) merged.add(runSampleUnit(eval, plan, u));
+  for (size_t i = 0; i < merged.film.pixelCount(); ++i) EXPECT_EQ(merged.film.pixelCounts()[i], 0.0);
+  const std::vector<Color> img = developSampleImage(plan, merged);
+  double meanB = 0;
+  for (const Color& c : img) meanB += c.b;
+  meanB /= img.size();
+  const double N = double(spp) * w * h;
+  EXPECT_NEAR(meanB, 1.5, 5 * std::sqrt(N * 0.25) / N);
+  // A pixel never receives less than its own camera splats.
+  for (const Color& c : img) EXPECT_GE(c.b, 1.0f - 1e-6f);
+}
+
+}  // namespace
+}  // namespace mlt
