@@ -97,6 +97,7 @@ struct SceneDesc {
   // Integrator defaults read from the scene's <integrator> block (the type is ignored).
   std::optional<int> maxDepth;     // path segments; -1 = unlimited (Mitsuba)
   std::optional<int> rrDepth;
+  std::optional<int> sampleCount;  // the sensor's <sampler> sample_count, if given (a hint; jobs choose spp)
   std::vector<std::string> warnings;  // e.g. "gaussian rfilter replaced by box"
 };
 
