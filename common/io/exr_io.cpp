@@ -37,18 +37,23 @@ const std::set<std::string>& reservedNames() {
   return names;
 }
 
+// Header attributes writeFilmExr adds itself.
+bool isInternal(const std::string& name) {
+  return name == kFormatAttr || name == kFormatVersionAttr || name == kNonFiniteAttr;
+}
+
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw std::runtime_error(path + ": " + what);
 }
 
 void addMetadata(const std::string& path, Imf::Header& header, const ImageMetadata& m) {
   for (const auto& [key, value] : m.strings) {
-    if (key.empty() || reservedNames().count(key) || key.rfind("mltfarm.", 0) == 0)
+    if (key.empty() || reservedNames().count(key) || isInternal(key))
       fail(path, "metadata key '" + key + "' is reserved or empty");
     header.insert(key, Imf::StringAttribute(value));
   }
   for (const auto& [key, value] : m.numbers) {
-    if (key.empty() || reservedNames().count(key) || key.rfind("mltfarm.", 0) == 0)
+    if (key.empty() || reservedNames().count(key) || isInternal(key))
       fail(path, "metadata key '" + key + "' is reserved or empty");
     if (m.strings.count(key)) fail(path, "metadata key '" + key + "' is both a string and a number");
     header.insert(key, Imf::DoubleAttribute(value));
@@ -61,7 +66,7 @@ ImageMetadata readMetadata(const Imf::Header& header, bool keepInternal) {
   for (auto it = header.begin(); it != header.end(); ++it) {
     const std::string name = it.name();
     if (reservedNames().count(name)) continue;
-    if (!keepInternal && name.rfind("mltfarm.", 0) == 0) continue;
+    if (!keepInternal && isInternal(name)) continue;
     const Imf::Attribute& a = it.attribute();
     if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&a)) m.strings[name] = s->value();
     else if (auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a)) m.numbers[name] = d->value();

@@ -8,6 +8,8 @@
 //    plus FLOAT R, G, B: a developed preview (Film::develop(previewSplatScale)), so any EXR viewer shows
 //    something sensible. The header carries the caller's metadata plus `mltfarm.format` ("partial-film")
 //    and `mltfarm.formatVersion`, and the film's non-finite sample count.
+// The keys mltfarm.format, mltfarm.formatVersion and mltfarm.nonFiniteSamples and OpenEXR's own
+// attribute names (channels, compression, ...) are reserved: using them in metadata is an error.
 // Metadata: strings become StringAttributes, numbers DoubleAttributes (OpenEXR has no 64-bit integer
 // attribute; counts up to 2^53 are exact in a double). Reading returns every string and double attribute
 // (int and float attributes are returned as numbers). Errors are std::runtime_error naming the file.
@@ -39,7 +41,7 @@ ExrImage readExr(const std::string& path);
 
 struct FilmExr {
   Film film;
-  ImageMetadata metadata;  // without the mltfarm.* bookkeeping attributes
+  ImageMetadata metadata;  // without the three bookkeeping attributes above
 };
 
 // previewSplatScale: the scale passed to Film::develop for the FLOAT preview channels only; the raw
