@@ -22,7 +22,8 @@ struct CameraWiSample {  // BDPT t=1 / light tracing: connect a point to the len
   Vec3 wi;               // unit, from ref toward the lens point
   Vec3 pLens;
   Vec3 nLens;            // camera forward axis
-  float pdfW = 0;        // solid-angle density at ref of choosing pLens (1 for a pinhole = delta position)
+  float pdfW = 0;        // solid-angle density at ref of choosing pLens (pbrt-v3 Sample_Wi): dist^2 / (|cos| lensArea),
+                         // lensArea = 1 for a pinhole (its delta position has pdfA 1); contribution = We f |cos_ref| / pdfW
   Vec2 pRaster;          // where the path lands on the film, in pixels ([0,W) x [0,H))
 };
 

@@ -1,0 +1,23 @@
+// Constructors of the individual light types (one file each family); makeLight (light.h) dispatches on
+// LightDesc::Type. Each validates its parameters and throws std::runtime_error naming the field.
+#pragma once
+#include <memory>
+
+#include "common/core/color.h"
+#include "common/core/vec.h"
+#include "common/render/light.h"
+
+namespace mlt {
+
+// Isotropic point light of intensity I (W/sr).
+std::unique_ptr<Light> makePointLight(const Vec3& position, const Color& I);
+// Spot light (Mitsuba): intensity I (W/sr) on the axis, full inside beamWidth, falling off linearly in
+// angle to zero at cutoff (half-angles in degrees).
+std::unique_ptr<Light> makeSpotLight(const Vec3& position, const Vec3& axis, const Color& I, float cutoffDeg,
+                                     float beamWidthDeg);
+// Directional light: irradiance E (W/m^2) on surfaces perpendicular to the travel direction d.
+std::unique_ptr<Light> makeDirectionalLight(const Vec3& d, const Color& E);
+// Constant environment: radiance L from every direction.
+std::unique_ptr<Light> makeConstantEnvironment(const Color& L);
+
+}  // namespace mlt

@@ -1,0 +1,132 @@
+// Lights with a delta position: the isotropic point light and Mitsuba's spot light.
+// Conventions (light.h): sampleLi's pdfW = pdfA = 1 and L = I(w) / dist^2 (pbrt-v3); they can never be
+// hit, so pdfLi = 0; sampleLe's pdfPos = 1 and L is the intensity in the sampled direction.
+#include <algorithm>
+#include <stdexcept>
+
+#include "common/core/sampling.h"
+#include "common/emitter/light_factories.h"
+
+namespace mlt {
+namespace {
+
+// ---- point -------------------------------------------------------------------------------------
+class PointLight final : public Light {
+ public:
+  PointLight(const Vec3& p, const Color& I) : p_(p), I_(I) {}
+
+  std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const override {
+    Vec3 wi = p_ - ref;
+    const float d2 = lengthSquared(wi);
+    if (!(d2 > 0)) return std::nullopt;
+    LightLiSample s;
+    s.wi = wi / std::sqrt(d2);
+    s.L = I_ / d2;
+    s.pLight = p_;
+    s.pdfW = s.pdfA = 1;
+    s.deltaPosition = true;
+    return s;
+  }
+  float pdfLi(const Vec3&, const Vec3&, const Vec3&, const Vec3&) const override { return 0; }
+  std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const override {
+    LightLeSample s;
+    s.L = I_;
+    s.ray.o = p_;
+    s.ray.d = sampleUniformSphere(uDir);
+    s.pdfPos = 1;
+    s.pdfDir = uniformSpherePdfW();
+    return s;
+  }
+  void pdfLe(const Vec3&, const Vec3&, const Vec3&, float* pdfPos, float* pdfDir) const override {
+    *pdfPos = 1;
+    *pdfDir = uniformSpherePdfW();
+  }
+  Color power() const override { return I_ * (4 * kPi); }
+  bool deltaPosition() const override { return true; }
+
+ private:
+  Vec3 p_;
+  Color I_;
+};
+
+// ---- spot --------------------------------------------------------------------------------------
+class SpotLight final : public Light {
+ public:
+  SpotLight(const Vec3& p, const Vec3& axis, const Color& I, float cutoffDeg, float beamDeg)
+      : p_(p), frame_(axis), I_(I) {
+    cutoff_ = cutoffDeg * kPi / 180;
+    beam_ = std::min(beamDeg, cutoffDeg) * kPi / 180;  // Mitsuba clamps the beam width to the cutoff
+    cosCutoff_ = std::cos(cutoff_);
+    cosBeam_ = std::cos(beam_);
+  }
+
+  // Mitsuba's falloff curve: 1 inside the beam, (cutoff - theta) / (cutoff - beam) in the transition,
+  // 0 beyond the cutoff (continuous, monotone in theta).
+  float falloff(float cosTheta) const {
+    if (cosTheta <= cosCutoff_) return 0;
+    if (cosTheta >= cosBeam_) return 1;
+    const float theta = std::acos(std::clamp(cosTheta, -1.0f, 1.0f));
+    return std::clamp((cutoff_ - theta) / (cutoff_ - beam_), 0.0f, 1.0f);
+  }
+
+  std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const override {
+    Vec3 wi = p_ - ref;
+    const float d2 = lengthSquared(wi);
+    if (!(d2 > 0)) return std::nullopt;
+    LightLiSample s;
+    s.wi = wi / std::sqrt(d2);
+    s.L = I_ * (falloff(-dot(s.wi, frame_.n)) / d2);
+    s.pLight = p_;
+    s.pdfW = s.pdfA = 1;
+    s.deltaPosition = true;
+    return s;
+  }
+  float pdfLi(const Vec3&, const Vec3&, const Vec3&, const Vec3&) const override { return 0; }
+  // Directions uniform in the cutoff cone.
+  std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const override {
+    const Vec3 local = sampleUniformCone(uDir, cosCutoff_);
+    LightLeSample s;
+    s.L = I_ * falloff(local.z);
+    s.ray.o = p_;
+    s.ray.d = normalize(frame_.toWorld(local));
+    s.pdfPos = 1;
+    s.pdfDir = uniformConePdfW(cosCutoff_);
+    return s;
+  }
+  void pdfLe(const Vec3&, const Vec3&, const Vec3& w, float* pdfPos, float* pdfDir) const override {
+    *pdfPos = 1;
+    *pdfDir = dot(w, frame_.n) > cosCutoff_ ? uniformConePdfW(cosCutoff_) : 0.0f;
+  }
+  // Phi = 2 pi I int_0^c f(theta) sin(theta) dtheta with f linear in theta between beam b and cutoff c:
+  //     = 2 pi I (1 - (sin c - sin b) / (c - b))   (-> 2 pi I (1 - cos c) as b -> c).
+  Color power() const override {
+    const float w = cutoff_ - beam_;
+    const float integral = w > 1e-4f ? 1 - (std::sin(cutoff_) - std::sin(beam_)) / w : 1 - std::cos(cutoff_);
+    return I_ * (2 * kPi * integral);
+  }
+  bool deltaPosition() const override { return true; }
+
+ private:
+  Vec3 p_;
+  Frame frame_;
+  Color I_;
+  float cutoff_, beam_, cosCutoff_, cosBeam_;
+};
+
+}  // namespace
+
+std::unique_ptr<Light> makePointLight(const Vec3& position, const Color& I) {
+  return std::make_unique<PointLight>(position, I);
+}
+
+std::unique_ptr<Light> makeSpotLight(const Vec3& position, const Vec3& axis, const Color& I, float cutoffDeg,
+                                     float beamWidthDeg) {
+  if (!(cutoffDeg > 0 && cutoffDeg < 180))
+    throw std::runtime_error("spot light: cutoff_angle must be in (0, 180) degrees");
+  if (!(beamWidthDeg >= 0)) throw std::runtime_error("spot light: beam_width must be >= 0 degrees");
+  const float len = length(axis);
+  if (!(len > 0) || !std::isfinite(len)) throw std::runtime_error("spot light: direction has zero length");
+  return std::make_unique<SpotLight>(position, axis / len, I, cutoffDeg, beamWidthDeg);
+}
+
+}  // namespace mlt
