@@ -1,0 +1,122 @@
+// `mltfarm render SCENE.xml ... -o OUT.exr`: renders a scene and writes OUT.exr (with metadata) and
+// OUT.png. For now every render runs in this process (--in-process, the default); issue 4's local farm
+// (a coordinator plus worker processes on loopback) will become the default and call the same job API.
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+#include "tools/cli/commands.h"
+#include "tools/cli/render_local.h"
+
+namespace mlt::cli {
+namespace {
+
+struct RenderCliOptions {
+  std::string scene, out, method = "bdpt", png;
+  int spp = 16, samplesPerUnit = 0, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0;
+  double mutationsPerPixel = 16, time = 0;
+  int chains = 0, bootstrap = 100000;
+  float largeStep = 0.3f, exposure = 0;
+  uint64_t seed = 1;
+  std::vector<std::string> defines;
+  bool inProcess = true, quiet = false;
+};
+
+std::map<std::string, std::string> parseDefines(const std::vector<std::string>& defines) {
+  std::map<std::string, std::string> out;
+  for (const std::string& d : defines) {
+    const size_t eq = d.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw std::invalid_argument("--define '" + d + "': expected name=value");
+    out[d.substr(0, eq)] = d.substr(eq + 1);
+  }
+  return out;
+}
+
+CommandRun setupRender(CLI::App& sub) {
+  auto o = std::make_shared<RenderCliOptions>();
+  sub.add_option("scene", o->scene, "Scene file (Mitsuba 0.6 / 3.x XML subset)")->required()->check(CLI::ExistingFile);
+  sub.add_option("-o,--output", o->out, "Output EXR; a PNG preview is written next to it (same stem)")->required();
+  sub.add_option("--png", o->png, "PNG preview path (default: OUT with the extension .png)");
+  sub.add_option("-m,--method", o->method, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}));
+  auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel (pt, lt: light paths = spp * pixels, bdpt)")
+                  ->capture_default_str()
+                  ->check(CLI::PositiveNumber);
+  sub.add_option("--samples-per-unit", o->samplesPerUnit,
+                 "pt/lt/bdpt: samples per pixel in one work unit (0 = spp / 16, rounded up)")
+      ->check(CLI::NonNegativeNumber);
+  sub.add_option("--mutations-per-pixel", o->mutationsPerPixel, "Markov chain methods: mutations per pixel")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--chains", o->chains, "Markov chain methods: number of chains (0 = automatic)")
+      ->check(CLI::NonNegativeNumber);
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap samples (per path length for mmlt)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--time", o->time,
+                 "Time budget in seconds. pt/lt/bdpt: run work units (in index order) until the time is up "
+                 "and develop with the samples actually taken (without --spp: up to 65536 spp, one sample "
+                 "per unit). Markov chains: chains that have not started when the time is up are dropped and "
+                 "the image is normalized by the mutations that ran. A unit in progress always finishes.")
+      ->check(CLI::NonNegativeNumber);
+  auto* maxDepth = sub.add_option("--max-depth", o->maxDepth,
+                                  "Maximum path length in segments (edges): 1 = directly visible emitters "
+                                  "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
+                                  "<integrator> max_depth, else 5)")
+                       ->check(CLI::Range(-1, 1 << 20));
+  auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth,
+                                 "Russian roulette starts after this many segments (default: the scene's "
+                                 "rr_depth, else 5)")
+                      ->check(CLI::NonNegativeNumber);
+  sub.add_option("--seed", o->seed, "Job seed (the image is a pure function of the settings and the seed)")
+      ->capture_default_str();
+  sub.add_option("-t,--threads", o->threads, "Threads (default: every core)")->check(CLI::NonNegativeNumber);
+  auto* width = sub.add_option("--width", o->width, "Film width (default: the scene's)")->check(CLI::PositiveNumber);
+  auto* height = sub.add_option("--height", o->height, "Film height (default: the scene's)")->check(CLI::PositiveNumber);
+  width->needs(height);
+  height->needs(width);
+  sub.add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR is never scaled)")->capture_default_str();
+  sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
+  sub.add_flag("--in-process,!--farm", o->inProcess,
+               "Render in this process (the default for now; the local farm will become the default)");
+  sub.add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
+
+  return [o, spp, maxDepth, rrDepth]() -> int {
+    if (!o->inProcess) throw std::runtime_error("--farm: the local farm is not available yet; use --in-process");
+    LocalRenderOptions lo;
+    lo.scenePath = o->scene;
+    lo.defines = parseDefines(o->defines);
+    RenderSettings& s = lo.settings;
+    s.method = parseMethod(o->method);
+    s.seed = o->seed;
+    s.width = o->width;
+    s.height = o->height;
+    s.spp = o->spp;
+    s.samplesPerUnit = o->samplesPerUnit;
+    s.mutationsPerPixel = o->mutationsPerPixel;
+    s.chains = o->chains;
+    s.bootstrapSamples = o->bootstrap;
+    s.largeStepProb = o->largeStep;
+    s.timeBudgetSeconds = o->time;
+    if (maxDepth->count()) lo.maxDepth = o->maxDepth;
+    if (rrDepth->count()) lo.rrDepth = o->rrDepth;
+    lo.sppGiven = spp->count() > 0;
+    lo.threads = o->threads;
+    lo.outExr = o->out;
+    lo.outPng = o->png;
+    lo.exposureStops = o->exposure;
+    lo.showProgress = !o->quiet;
+    renderLocal(lo);
+    return 0;
+  };
+}
+
+const CommandRegistration kRender("render", "Render a scene to OUT.exr and OUT.png", setupRender);
+
+}  // namespace
+}  // namespace mlt::cli

@@ -1,0 +1,204 @@
+// The in-process renderer (see render_local.h).
+#include "tools/cli/render_local.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <tbb/parallel_pipeline.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+#include "common/io/png_io.h"
+#include "common/render/render_scene.h"
+#include "common/scene/mitsuba_loader.h"
+#include "tools/cli/progress.h"
+
+namespace mlt::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Without --spp, a time-limited pt/lt/bdpt render plans this many samples per pixel in units of one
+// sample each and stops when the time is up.
+constexpr int kTimeOnlySppCap = 1 << 16;
+
+uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+// Restricts a Markov-chain plan to the chains that ran (a prefix in index order) and sets the
+// normalization's mutation totals to what they ran: chains are independent, so the estimate over the
+// chains that ran is the same estimator with a smaller M.
+void restrictToDoneUnits(JobPlan& plan, size_t done) {
+  plan.units.resize(done);
+  uint64_t total = 0;
+  std::vector<uint64_t> perLength(plan.norm.mutationsPerLength.size(), 0);
+  for (const WorkUnit& u : plan.units) {
+    total += u.mutations;
+    if (u.pathLength >= 0 && size_t(u.pathLength) < perLength.size()) perLength[u.pathLength] += u.mutations;
+  }
+  plan.norm.totalMutations = total;
+  if (!perLength.empty()) plan.norm.mutationsPerLength = perLength;
+}
+
+}  // namespace
+
+std::string pngPathFor(const std::string& exrPath) {
+  std::filesystem::path p(exrPath);
+  p.replace_extension(".png");
+  return p.string();
+}
+
+std::string sceneContentHash(const std::string& sceneFile, const std::vector<std::string>& referencedFiles) {
+  // FNV-1a 64 over (name length, name, size, bytes) of each file, scene file first. Names are the file
+  // names relative to the scene file's directory, so the hash does not depend on where the scene lives.
+  uint64_t h = 0xcbf29ce484222325ULL;
+  const std::filesystem::path base = std::filesystem::path(sceneFile).parent_path();
+  std::vector<std::string> files{sceneFile};
+  files.insert(files.end(), referencedFiles.begin(), referencedFiles.end());
+  for (const std::string& f : files) {
+    const std::string rel = std::filesystem::path(f).lexically_relative(base).generic_string();
+    const uint64_t len = rel.size();
+    h = fnv1a(h, &len, sizeof len);
+    h = fnv1a(h, rel.data(), rel.size());
+    std::ifstream in(f, std::ios::binary);
+    if (!in) throw std::runtime_error(f + ": cannot read (for the scene hash)");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const uint64_t size = bytes.size();
+    h = fnv1a(h, &size, sizeof size);
+    h = fnv1a(h, bytes.data(), bytes.size());
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)h);
+  return buf;
+}
+
+LocalRenderResult renderLocal(const LocalRenderOptions& options) {
+  // ---- Scene ----------------------------------------------------------------------------------------
+  SceneDesc desc = loadMitsubaScene(options.scenePath, options.defines);
+  for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  RenderSettings settings = options.settings;
+  if (settings.width < 0 || settings.height < 0) throw std::invalid_argument("--width/--height must be positive");
+  if (settings.width > 0) desc.camera.width = settings.width;
+  if (settings.height > 0) desc.camera.height = settings.height;
+  settings.width = settings.height = 0;  // resolved by planJob from the camera
+  settings.integrator.maxDepth = options.maxDepth.value_or(desc.maxDepth.value_or(settings.integrator.maxDepth));
+  settings.integrator.rrDepth = options.rrDepth.value_or(desc.rrDepth.value_or(settings.integrator.rrDepth));
+  const bool timed = settings.timeBudgetSeconds > 0;
+  if (timed && !options.sppGiven && !isMarkovChainMethod(settings.method)) {
+    settings.spp = kTimeOnlySppCap;
+    if (settings.samplesPerUnit == 0) settings.samplesPerUnit = 1;
+  }
+  LocalRenderResult result;
+  result.sceneHash = sceneContentHash(options.scenePath, desc.referencedFiles);
+  const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
+
+  // ---- Plan and run ---------------------------------------------------------------------------------
+  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  const auto start = Clock::now();
+  result.plan = planJob(*scene, settings);
+  JobPlan& plan = result.plan;
+  const size_t nUnits = plan.units.size();
+  std::unique_ptr<ProgressBar> progress;
+  if (options.showProgress)
+    progress = std::make_unique<ProgressBar>(std::string("render ") + methodName(settings.method), nUnits,
+                                             settings.timeBudgetSeconds);
+
+  // Units flow through a pipeline: issued in index order (stopping when the time is up), run in
+  // parallel, merged strictly in index order, so the sums do not depend on the thread count.
+  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
+                                    std::chrono::duration<double>(settings.timeBudgetSeconds));
+  size_t nextUnit = 0, merged = 0;
+  const RenderScene& sceneRef = *scene;
+  tbb::parallel_pipeline(
+      size_t(2 * threads),
+      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                     [&](tbb::flow_control& fc) -> size_t {
+                                       if (nextUnit >= nUnits || (timed && Clock::now() >= deadline)) {
+                                         fc.stop();
+                                         return 0;
+                                       }
+                                       return nextUnit++;
+                                     }) &
+          tbb::make_filter<size_t, std::shared_ptr<PartialResult>>(
+              tbb::filter_mode::parallel,
+              [&](size_t i) { return std::make_shared<PartialResult>(runWorkUnit(sceneRef, plan, plan.units[i])); }) &
+          tbb::make_filter<std::shared_ptr<PartialResult>, void>(tbb::filter_mode::serial_in_order,
+                                                                 [&](std::shared_ptr<PartialResult> r) {
+                                                                   result.merged.add(*r);
+                                                                   ++merged;
+                                                                   if (progress) progress->update(merged);
+                                                                 }));
+  if (merged == 0) throw std::runtime_error("no work unit finished within the time budget");
+  if (merged < nUnits && isMarkovChainMethod(plan.settings.method)) restrictToDoneUnits(plan, merged);
+  if (merged < nUnits && !isMarkovChainMethod(plan.settings.method)) plan.units.resize(merged);
+  result.image = developImage(plan, result.merged);
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+  // ---- Metadata and output --------------------------------------------------------------------------
+  const bool chains = isMarkovChainMethod(plan.settings.method);
+  const double pixels = double(result.merged.film.pixelCount());
+  ImageMetadata& m = result.metadata;
+  m.strings["software"] = "mltfarm";
+  m.strings["method"] = methodName(plan.settings.method);
+  m.strings["scene"] = options.scenePath;
+  m.strings["sceneHash"] = result.sceneHash;
+  m.strings["seed"] = std::to_string(plan.settings.seed);  // a string: 64-bit seeds do not fit a double
+  m.numbers["width"] = plan.settings.width;
+  m.numbers["height"] = plan.settings.height;
+  m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
+  m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
+  m.numbers["renderSeconds"] = result.seconds;
+  m.numbers["threads"] = threads;
+  m.numbers["workUnits"] = double(merged);
+  m.numbers["workUnitsPlanned"] = double(nUnits);
+  m.numbers["nonFiniteSamples"] = double(result.merged.film.nonFiniteSamples());
+  if (timed) m.numbers["timeBudgetSeconds"] = plan.settings.timeBudgetSeconds;
+  if (chains) {
+    m.numbers["mutations"] = double(result.merged.samples);
+    m.numbers["mutationsPerPixel"] = double(result.merged.samples) / pixels;
+    m.numbers["chains"] = double(merged);
+    m.numbers["b"] = plan.norm.b;
+    m.numbers["bStdErr"] = plan.norm.bStdErr;
+    m.numbers["bootstrapSamples"] = double(plan.norm.bootstrapSamples);
+    m.numbers["largeStepProb"] = plan.settings.largeStepProb;
+    for (size_t k = 0; k < plan.norm.bk.size(); ++k)
+      if (plan.norm.bk[k] != 0) m.numbers["b" + std::to_string(k)] = plan.norm.bk[k];
+  } else {
+    m.numbers["samples"] = double(result.merged.samples);
+    m.numbers["spp"] = double(result.merged.samples) / pixels;
+  }
+  if (!options.outExr.empty()) {
+    writeExr(options.outExr, plan.settings.width, plan.settings.height, result.image, m);
+    const std::string png = options.outPng.empty() ? pngPathFor(options.outExr) : options.outPng;
+    writePng(png, plan.settings.width, plan.settings.height, result.image, options.exposureStops);
+  }
+  if (progress) {
+    const char* what = chains ? "mutations" : "samples";
+    char line[512];
+    std::snprintf(line, sizeof line, "%s: %llu %s in %.2f s (%.3g %s/s), %zu/%zu work units%s%s",
+                  methodName(plan.settings.method), (unsigned long long)result.merged.samples, what, result.seconds,
+                  double(result.merged.samples) / std::max(result.seconds, 1e-9), what, merged, nUnits,
+                  result.merged.film.nonFiniteSamples() ? ", non-finite samples dropped: " : "",
+                  result.merged.film.nonFiniteSamples()
+                      ? std::to_string(result.merged.film.nonFiniteSamples()).c_str()
+                      : "");
+    progress->finish(line);
+  }
+  return result;
+}
+
+}  // namespace mlt::cli
