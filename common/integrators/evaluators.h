@@ -1,0 +1,43 @@
+// The sample-based path evaluators: pt, lt and bdpt behind the PathEvaluator interface.
+//
+//  pt   - path tracing with NEE + MIS (path_tracer.h): one splat, t = -1, at the camera raster position.
+//  lt   - light tracing: one light subpath, every vertex connected to the camera (bdpt's (s, 1)
+//         strategies, unweighted, including (1, 1): area lights seen directly). Splats at their own raster
+//         positions with t = 1; the pixel argument is ignored. Develop with splat scale P / N.
+//  bdpt - one camera and one light subpath, every strategy (s, t) with 1 <= s + t - 1 <= maxDepth except
+//         (1, 1), MIS-weighted (balance or power heuristic). Splats carry s and t, so a driver can keep
+//         one image per technique; t >= 2 land on cameraRaster (a pixel estimate: sum them into one
+//         camera sample), t = 1 splats land anywhere (splat buffer, scale P / N).
+#pragma once
+#include <memory>
+
+#include "common/integrators/path_evaluator.h"
+#include "common/job/render_job.h"
+
+namespace mlt {
+
+// Throws std::invalid_argument for Markov chain methods (they wrap an evaluator, see common/mlt).
+std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, Method method,
+                                             const IntegratorSettings& settings);
+
+class BdptEvaluator final : public PathEvaluator {
+ public:
+  BdptEvaluator(const RenderScene& scene, const IntegratorSettings& settings) : scene_(scene), settings_(settings) {}
+  void evaluate(SampleSource& source, const Vec2* pixel, PathContribution& out) const override;
+
+ private:
+  const RenderScene& scene_;
+  IntegratorSettings settings_;
+};
+
+class LightTracer final : public PathEvaluator {
+ public:
+  LightTracer(const RenderScene& scene, const IntegratorSettings& settings) : scene_(scene), settings_(settings) {}
+  void evaluate(SampleSource& source, const Vec2* pixel, PathContribution& out) const override;
+
+ private:
+  const RenderScene& scene_;
+  IntegratorSettings settings_;
+};
+
+}  // namespace mlt
