@@ -35,13 +35,13 @@ std::map<std::string, std::string> parseDefines(const std::vector<std::string>& 
 
 CommandRun setupRender(CLI::App& sub) {
   auto o = std::make_shared<RenderCliOptions>();
-  sub.add_option("scene", o->scene, "Scene file (Mitsuba 0.6 / 3.x XML subset)")->required()->check(CLI::ExistingFile);
+  sub.add_option("scene", o->scene, "Scene file (Mitsuba 0.6 / 3.x XML subset)")->required();  // existence is checked by the loader (exit code 2)
   sub.add_option("-o,--output", o->out, "Output EXR; a PNG preview is written next to it (same stem)")->required();
   sub.add_option("--png", o->png, "PNG preview path (default: OUT with the extension .png)");
   sub.add_option("-m,--method", o->method, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")
       ->capture_default_str()
       ->check(CLI::IsMember({"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}));
-  auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel (pt, lt: light paths = spp * pixels, bdpt)")
+  auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel for pt, lt (light paths = spp * pixels) and bdpt (default: the scene's sampler sample_count, else 16)")
                   ->capture_default_str()
                   ->check(CLI::PositiveNumber);
   sub.add_option("--samples-per-unit", o->samplesPerUnit,
