@@ -1,0 +1,269 @@
+// The Markov-chain half of the job API: plan (bootstrap + chain allocation), run one chain, develop.
+// Normalization is derived in common/mlt/develop.h; the chain loop is common/mlt/chain.h.
+#include "common/job/mlt_job.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "common/job/sample_job.h"
+#include "common/mlt/bootstrap.h"
+#include "common/mlt/chain.h"
+#include "common/mlt/develop.h"
+#include "common/mlt/kelemen_source.h"
+#include "common/mlt/method_target.h"
+#include "common/mlt/pss_chain.h"
+#include "common/mlt/target.h"
+#include "common/render/render_scene.h"
+
+#if __has_include("common/integrators/evaluators.h")
+#include "common/integrators/evaluators.h"
+#define MLT_JOB_HAVE_EVALUATORS 1
+#else
+#define MLT_JOB_HAVE_EVALUATORS 0
+#endif
+
+namespace mlt {
+
+namespace {
+
+// Relative tolerance of the start-state replay check. The replay runs the same code on the same numbers,
+// so it is bit-exact on one machine; the tolerance only absorbs a different compiler's float contraction.
+constexpr double kReplayTolerance = 1e-5;
+
+// Chains when settings.chains == 0: a function of the work only (never of the machine), so the plan and
+// the image bits do not depend on where the coordinator runs. ~16k mutations per chain, 64..4096 chains.
+uint64_t defaultChains(uint64_t totalMutations) {
+  return std::clamp<uint64_t>(totalMutations / 16384, 64, 4096);
+}
+
+bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > u.sampleBegin; }
+
+std::vector<int> chainLengths(const RenderSettings& s) {
+  if (s.method != Method::MMLT) return {-1};
+  if (s.integrator.maxDepth < 1)
+    throw std::invalid_argument("settings: mmlt needs a finite max depth >= 1 (got " +
+                                std::to_string(s.integrator.maxDepth) + ")");
+  std::vector<int> lengths;
+  for (int k = mmltMinLength(s.separateDirect); k <= s.integrator.maxDepth; ++k) lengths.push_back(k);
+  return lengths;
+}
+
+KelemenParams kelemenParams(const RenderSettings& s) {
+  KelemenParams p;
+  p.largeStepProb = s.largeStepProb;
+  p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
+  p.s1 = s.kelemenS1;
+  p.s2 = s.kelemenS2;
+  p.sigma = s.gaussianSigma;
+  return p;
+}
+
+// Settings of the direct-illumination pass (separateDirect): bdpt limited to kDirectMaxSegments.
+JobPlan directPlan(const JobPlan& plan) {
+  JobPlan d;
+  d.settings = plan.settings;
+  d.settings.method = Method::BDPT;
+  d.settings.integrator.maxDepth = kDirectMaxSegments;
+  return d;
+}
+
+}  // namespace
+
+JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
+  const RenderSettings& s = settings;
+  if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
+    throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
+  if (s.bootstrapSamples < 2)
+    throw std::invalid_argument("settings: bootstrap samples must be >= 2, got " + std::to_string(s.bootstrapSamples));
+  if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
+  if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
+  KelemenSource validate(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
+
+  JobPlan plan;
+  plan.settings = s;
+  const uint64_t P = uint64_t(s.width) * uint64_t(s.height);
+  const uint64_t M = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(s.mutationsPerPixel * double(P))));
+  const std::vector<int> lengths = chainLengths(s);
+
+  // ---- bootstrap ----
+  BootstrapResult boot;
+  if (!lengths.empty()) {
+    BootstrapConfig bc;
+    bc.candidatesPerLength = uint64_t(s.bootstrapSamples);
+    bc.pathLengths = lengths;
+    const uint64_t seed = s.seed;
+    boot = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {
+      auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);
+      auto path = std::make_shared<PathContribution>();
+      return [target, path, seed](uint64_t index, int k) {
+        IndependentSource source(seed, index);
+        target->evaluate(source, k, *path);
+        return targetFunction(*path);
+      };
+    });
+  }
+  Normalization& norm = plan.norm;
+  norm.b = boot.b;
+  norm.bStdErr = boot.bStdErr;
+  norm.bootstrapSamples = boot.candidates;
+  norm.bootstrapSeconds = boot.seconds;
+  norm.totalMutations = boot.b > 0 ? M : 0;
+
+  // ---- chain allocation: mutations M_k and chains C_k proportional to b_k (largest remainder) ----
+  std::vector<double> bk;
+  for (const auto& lb : boot.lengths) bk.push_back(lb.b);
+  const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, bk) : std::vector<uint64_t>(bk.size(), 0);
+  const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
+  std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, bk) : std::vector<uint64_t>(bk.size(), 0);
+  if (s.method == Method::MMLT) {
+    const int kMax = lengths.empty() ? 0 : lengths.back();
+    norm.bk.assign(kMax + 1, 0);
+    norm.bkStdErr.assign(kMax + 1, 0);
+    norm.mutationsPerLength.assign(kMax + 1, 0);
+  } else {
+    norm.mutationsPerLength.assign(1, 0);
+  }
+  uint32_t index = 0;
+  for (size_t l = 0; l < boot.lengths.size(); ++l) {
+    const LengthBootstrap& lb = boot.lengths[l];
+    const int slot = lb.pathLength < 0 ? 0 : lb.pathLength;
+    if (s.method == Method::MMLT) {
+      norm.bk[slot] = lb.b;
+      norm.bkStdErr[slot] = lb.bStdErr;
+    }
+    norm.mutationsPerLength[slot] = Mk[l];
+    if (Mk[l] == 0) continue;
+    const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
+    for (uint64_t j = 0; j < chains; ++j) {
+      WorkUnit u;
+      u.index = index++;
+      u.pathLength = lb.pathLength;
+      u.mutations = Mk[l] / chains + (j < Mk[l] % chains ? 1 : 0);
+      // Start candidate: stratified resampling over the alias table, jittered by the chain's own stream.
+      Pcg32 rng = chainRng(s.seed, u.index, 2);
+      const double uStart = (double(j) + rng.uniformDouble()) / double(chains);
+      u.startCandidate = lb.firstCandidate + lb.table.sample(std::min(uStart, 1.0 - 0x1p-53));
+      u.startContribution = lb.c[u.startCandidate - lb.firstCandidate];
+      plan.units.push_back(u);
+    }
+  }
+  plan.settings.chains = static_cast<int>(index);
+
+  // ---- direct illumination pass (separateDirect): bdpt sample batches after the chains ----
+  if (s.separateDirect) {
+    JobPlan d = planSampleJob(directPlan(plan).settings);
+    for (WorkUnit u : d.units) {
+      u.index = index++;
+      plan.units.push_back(u);
+    }
+    plan.settings.samplesPerUnit = d.settings.samplesPerUnit;
+  }
+  spdlog::info("{}: b = {:.6g} +- {:.3g}, {} chains, {} mutations ({} per pixel){}", methodName(s.method), norm.b,
+               norm.bStdErr, plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
+               s.separateDirect ? ", direct light by bdpt" : "");
+  return plan;
+}
+
+PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
+  const auto start = std::chrono::steady_clock::now();
+  const RenderSettings& s = plan.settings;
+  const Normalization& norm = plan.norm;
+  const size_t P = size_t(s.width) * size_t(s.height);
+
+  if (isDirectUnit(unit)) {
+    if (!s.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
+#if MLT_JOB_HAVE_EVALUATORS
+    const JobPlan d = directPlan(plan);
+    const auto evaluator = makeEvaluator(scene, Method::BDPT, d.settings.integrator);
+    PartialResult r = runSampleUnit(*evaluator, d, unit);
+    const double pre = directSplatPrescale(norm.b, norm.totalMutations, uint64_t(s.spp) * P);  // (D3)
+    for (RGBd& v : r.film.splatSums()) { v.r *= pre; v.g *= pre; v.b *= pre; }
+    quantizeFilm(r.film, s.seed, unit.index);
+    r.samples = 0;  // samples count mutations in a Markov chain job
+    return r;
+#else
+    throw std::runtime_error("separateDirect: path evaluators are not built yet");
+#endif
+  }
+
+  if (unit.mutations == 0) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " has no mutations");
+  const int k = unit.pathLength;
+  if ((s.method == Method::MMLT) != (k >= 1))
+    throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": path length " + std::to_string(k) +
+                                " does not fit method " + methodName(s.method));
+  const int slot = k < 0 ? 0 : k;
+  if (slot >= int(norm.mutationsPerLength.size()) || norm.mutationsPerLength[slot] == 0)
+    throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": the plan has no mutations for path length " + std::to_string(k));
+  const double bChain = s.method == Method::MMLT ? norm.bk[slot] : norm.b;
+
+  PartialResult result;
+  result.film = Film(s.width, s.height);
+  result.units = {unit.index};
+  KelemenSource source(kelemenParams(s), s.seed, unit.index, unit.startCandidate);
+  MethodTarget target(scene, s.method, s.integrator, s.separateDirect);
+
+  // Replay the start candidate (iteration 0 of the source reads IndependentSource(seed, candidate)).
+  PathContribution current, scratch;
+  target.evaluate(source, k, current);
+  const double c0 = targetFunction(current);
+  if (!(std::fabs(c0 - unit.startContribution) <= kReplayTolerance * std::fabs(unit.startContribution)) || !(c0 > 0))
+    throw std::runtime_error(fmt::format(
+        "chain replay mismatch: job seed {}, chain {}, candidate {}, path length {}: bootstrap recorded c = {:.17g}, "
+        "replay gives c = {:.17g} (scene or code differs between coordinator and worker?)",
+        s.seed, unit.index, unit.startCandidate, k, unit.startContribution, c0));
+  source.accept();
+
+  PssState state(source);
+  MethodChainTarget chainTarget(target, source, k);
+  const double rk = s.method == Method::MMLT
+                        ? lengthWeightCorrection(norm.bk[slot], norm.mutationsPerLength[slot], norm.b, norm.totalMutations)
+                        : 1.0;  // (D2)
+  FilmSink sink(result.film, rk);
+  ChainConfig config;
+  config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
+  config.largeStepProb = s.largeStepProb;
+  config.b = bChain;
+  Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
+  const ChainCounts counts = runChain(state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
+
+  quantizeFilm(result.film, s.seed, unit.index);
+  result.samples = unit.mutations;
+  ChainStats& st = result.stats;
+  st.proposedPerLength.assign(slot + 1, 0);
+  st.acceptedPerLength.assign(slot + 1, 0);
+  st.proposedPerLength[slot] = counts.proposed[0] + counts.proposed[1];
+  st.acceptedPerLength[slot] = counts.accepted[0] + counts.accepted[1];
+  st.largeProposed = counts.proposed[int(MutationType::Large)];
+  st.largeAccepted = counts.accepted[int(MutationType::Large)];
+  st.smallProposed = counts.proposed[int(MutationType::Small)];
+  st.smallAccepted = counts.accepted[int(MutationType::Small)];
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged) {
+  const size_t P = size_t(plan.settings.width) * size_t(plan.settings.height);
+  if (merged.film.pixelCount() == 0) {
+    if (plan.units.empty()) return std::vector<Color>(P);  // b = 0: nothing carries light
+    throw std::invalid_argument("developImage: no work units merged");
+  }
+  // (D1) with the planned M when every chain is merged; a preview of some chains uses the mutations it
+  // holds (pssmlt: each chain is stationary, so any subset estimates the image).
+  uint64_t plannedChainMutations = 0;
+  for (const WorkUnit& u : plan.units) plannedChainMutations += u.mutations;
+  uint64_t M = plan.norm.totalMutations;
+  if (merged.samples != plannedChainMutations) {
+    spdlog::warn("developImage: {} of {} planned mutations merged; developing a preview", merged.samples,
+                 plannedChainMutations);
+    M = merged.samples;
+  }
+  return merged.film.develop(chainSplatScale(plan.norm.b, M, merged.film.pixelCount()));
+}
+
+}  // namespace mlt

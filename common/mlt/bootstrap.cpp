@@ -1,0 +1,94 @@
+#include "common/mlt/bootstrap.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace mlt {
+
+BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn) {
+  const auto start = std::chrono::steady_clock::now();
+  if (config.candidatesPerLength < 2)
+    throw std::invalid_argument("bootstrap: need at least 2 candidates per path length, got " +
+                                std::to_string(config.candidatesPerLength));
+  if (config.pathLengths.empty()) throw std::invalid_argument("bootstrap: no path lengths");
+  const uint64_t N = config.candidatesPerLength;
+  BootstrapResult result;
+  double var = 0;
+  for (size_t l = 0; l < config.pathLengths.size(); ++l) {
+    LengthBootstrap lb;
+    lb.pathLength = config.pathLengths[l];
+    lb.firstCandidate = l * N;
+    lb.c.resize(N);
+    const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
+      CandidateFn fn = makeCandidateFn();
+      for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
+    };
+    if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(0, N, 1024), body);
+    else body(tbb::blocked_range<uint64_t>(0, N));
+    // Sequential reductions in index order (bit-identical for any thread count).
+    double sum = 0;
+    for (uint64_t i = 0; i < N; ++i) {
+      if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
+        throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
+                                 " has invalid target value " + std::to_string(lb.c[i]));
+      sum += lb.c[i];
+    }
+    lb.b = sum / double(N);
+    double sq = 0;
+    for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
+    const double varMean = sq / (double(N) * double(N - 1));  // variance of the mean
+    lb.bStdErr = std::sqrt(varMean);
+    if (lb.b > 0) lb.table = AliasTable(lb.c);
+    result.b += lb.b;
+    var += varMean;
+    result.candidates += N;
+    if (lb.pathLength >= 0)
+      spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.b, lb.bStdErr,
+                   lb.b > 0 ? 100 * lb.bStdErr / lb.b : 0.0, N);
+    result.lengths.push_back(std::move(lb));
+  }
+  result.bStdErr = std::sqrt(var);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  spdlog::info("bootstrap: b = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates in {:.2f} s", result.b, result.bStdErr,
+               result.b > 0 ? 100 * result.bStdErr / result.b : 0.0, result.candidates, result.seconds);
+  return result;
+}
+
+std::vector<uint64_t> apportion(uint64_t total, const std::vector<double>& weights) {
+  std::vector<uint64_t> share(weights.size(), 0);
+  double sum = 0;
+  for (double w : weights) {
+    if (!(std::isfinite(w) && w >= 0)) throw std::invalid_argument("apportion: invalid weight " + std::to_string(w));
+    sum += w;
+  }
+  if (weights.empty() || !(sum > 0)) return share;
+  std::vector<double> remainder(weights.size());
+  uint64_t given = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    const double exact = double(total) * (weights[i] / sum);
+    share[i] = static_cast<uint64_t>(std::floor(exact));
+    remainder[i] = exact - double(share[i]);
+    given += share[i];
+  }
+  // Rounding can overshoot by one in extreme cases; take back from the smallest remainders.
+  std::vector<size_t> order(weights.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return remainder[a] > remainder[b]; });
+  for (size_t j = 0; given < total; j = (j + 1) % order.size())
+    if (weights[order[j]] > 0) { ++share[order[j]]; ++given; }
+  for (size_t j = order.size(); given > total;) {
+    j = (j == 0 ? order.size() : j) - 1;
+    if (share[order[j]] > 0) { --share[order[j]]; --given; }
+  }
+  return share;
+}
+
+}  // namespace mlt

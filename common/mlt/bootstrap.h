@@ -1,0 +1,53 @@
+// The bootstrap phase (run by the coordinator): N candidate paths, each a pure function of (job seed,
+// candidate index), whose target values c give the normalization b = E[c] (and b_k per path length for
+// mmlt) with its standard error, and an alias table from which chains draw their start states in
+// proportion to c.
+//
+// Candidate indexing: path length slot l (l = 0 for pssmlt; l = k - kMin for mmlt) owns candidates
+// [l * N, (l + 1) * N); candidate i reads IndependentSource(jobSeed, i). A worker replays candidate i
+// with exactly that source.
+//
+// Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
+// alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "common/mlt/alias_table.h"
+
+namespace mlt {
+
+// c(x) of candidate `index` for path length `pathLength` (-1: any length). Must be a pure function.
+using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
+// Makes a CandidateFn with its own scratch buffers (called once per parallel task).
+using CandidateFnFactory = std::function<CandidateFn()>;
+
+struct BootstrapConfig {
+  uint64_t candidatesPerLength = 100000;
+  std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
+  bool parallel = true;
+};
+
+struct LengthBootstrap {
+  int pathLength = -1;
+  uint64_t firstCandidate = 0;
+  std::vector<double> c;  // target value of each candidate
+  double b = 0, bStdErr = 0;
+  AliasTable table;       // over c; empty if b == 0
+};
+
+struct BootstrapResult {
+  std::vector<LengthBootstrap> lengths;
+  double b = 0, bStdErr = 0;  // sum over lengths
+  uint64_t candidates = 0;
+  double seconds = 0;
+};
+
+BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn);
+
+// Largest-remainder (Hamilton) apportionment of `total` among weights (ties to the lower index):
+// deterministic, sums exactly to total, and each share is within 1 of total * w_i / sum(w).
+std::vector<uint64_t> apportion(uint64_t total, const std::vector<double>& weights);
+
+}  // namespace mlt

@@ -1,0 +1,63 @@
+#include "common/mlt/chain.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "common/mlt/target.h"
+
+namespace mlt {
+
+ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& config, ChainSink& sink,
+                     Pcg32& acceptRng, uint64_t mutations, PathContribution& current, double cx,
+                     PathContribution& scratch) {
+  if (!(cx > 0)) throw std::invalid_argument("runChain: the start state has target value " + std::to_string(cx) +
+                                             " (must be > 0)");
+  const bool mis = config.splatting == ChainSplatting::KelemenMIS;
+  if (mis && !(config.b > 0)) throw std::invalid_argument("runChain: Kelemen MIS splatting needs b > 0");
+  const double bPlarge = mis ? config.b * config.largeStepProb : 0.0;
+
+  ChainCounts counts;
+  PathContribution* x = &current;
+  PathContribution* y = &scratch;
+  double xWeight = 0;  // accumulated, not yet splatted weight of the current state
+  for (uint64_t m = 0; m < mutations; ++m) {
+    const Proposal p = state.propose();
+    y->clear();
+    target.evaluate(*y);
+    const double cy = targetFunction(*y);
+    const double ratio = p.tRatio * cy / cx;
+    const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);
+    const int type = static_cast<int>(p.type);
+    ++counts.proposed[type];
+
+    double wy, wx;
+    if (mis) {
+      const double large = p.type == MutationType::Large ? 1.0 : 0.0;
+      wy = (cy > 0 || large > 0) ? (a + large) / (cy + bPlarge) : 0.0;
+      wx = (1 - a) / (cx + bPlarge);
+    } else {
+      wy = cy > 0 ? a / cy : 0.0;
+      wx = (1 - a) / cx;
+    }
+    xWeight += wx;
+
+    if (a > 0 && acceptRng.uniformDouble() < a) {
+      ++counts.accepted[type];
+      if (xWeight > 0) sink.splat(*x, xWeight);
+      std::swap(x, y);
+      cx = cy;
+      xWeight = wy;
+      state.accept();
+    } else {
+      if (wy > 0 && !y->splats.empty()) sink.splat(*y, wy);
+      state.reject();
+    }
+  }
+  if (xWeight > 0) sink.splat(*x, xWeight);
+  if (x != &current) std::swap(current, scratch);  // O(1): swaps the vectors' buffers
+  return counts;
+}
+
+}  // namespace mlt

@@ -1,0 +1,82 @@
+// The chain loop, written once for every Markov chain method:
+//   propose -> evaluate -> a = min(1, T-ratio * c(y) / c(x)) -> accept/reject -> weighted splats to a sink.
+//
+// The three roles are interfaces so that the same loop serves
+//   - primary-sample-space chains (pssmlt, pssmlt-bdpt, mmlt): a KelemenSource behind ChainState, a path
+//     evaluator or an mmlt technique evaluator behind ChainTarget (pss_chain.h);
+//   - reversible-jump MLT (later): a writable sample source whose jumps report T-ratio * |Jacobian|;
+//   - Veach's path-space MLT (later): a path state whose mutations report their own T-ratio.
+// Nothing here assumes a primary sample space.
+//
+// Splatting (the estimator of pixel j is  b * P / M_total * sum of weighted splats, see develop.h):
+//   ExpectedValue (Veach 1997): per step the proposal y gets weight a / c(y) and the current state x
+//     weight (1 - a) / c(x); each step distributes total weight 1 over {x, y} in units of f / c.
+//   KelemenMIS (Kelemen et al. 2002, sec. 5-6): the Metropolis samples (density c/b per mutation,
+//     M of them) are combined with the large-step samples (uniform density 1, expected p_large * M of
+//     them) by the balance heuristic. The paper's weights, in image units, are
+//        proposal: (a + L) / ((c(y)/b + p_large) M),    current: (1 - a) / ((c(x)/b + p_large) M),
+//     with L = 1 for a large step. To keep one development scale b * P / M for both schemes we factor
+//     b / M out:  (a + L) / ((c(y)/b + p_large) M) = (b / M) * (a + L) / (c(y) + b p_large),
+//     so the chain splats with weight (a + L) / (c(y) + b p_large) and (1 - a) / (c(x) + b p_large).
+//     With p_large = 0 these reduce to the expected-value weights a / c(y), (1 - a) / c(x).
+//     Hence a chain using KelemenMIS must be given b (its own b_k for an mmlt chain of length k).
+// Weights of the current state are accumulated and splatted once when the state changes (Kelemen's
+// Next(), sec. 6): fewer splats, same estimator.
+#pragma once
+#include <cstdint>
+
+#include "common/core/rng.h"
+#include "common/integrators/path_evaluator.h"
+#include "common/mlt/kelemen_source.h"
+
+namespace mlt {
+
+enum class ChainSplatting { ExpectedValue, KelemenMIS };
+
+struct Proposal {
+  MutationType type = MutationType::Small;
+  double tRatio = 1;  // T(y -> x) / T(x -> y) (times |Jacobian| for reversible jumps); 1 for PSS steps
+};
+
+// The chain's state. propose() turns the current state into a proposal in place (remembering how to undo
+// it); accept() commits it, reject() restores the previous state exactly.
+class ChainState {
+ public:
+  virtual ~ChainState() = default;
+  virtual Proposal propose() = 0;
+  virtual void accept() = 0;
+  virtual void reject() = 0;
+};
+
+// Evaluates the state's current point (the proposal, after propose()) into a path contribution.
+class ChainTarget {
+ public:
+  virtual ~ChainTarget() = default;
+  virtual void evaluate(PathContribution& out) = 0;
+};
+
+// Receives weighted splats: every splat of `path` times `weight` (see the scheme above).
+class ChainSink {
+ public:
+  virtual ~ChainSink() = default;
+  virtual void splat(const PathContribution& path, double weight) = 0;
+};
+
+struct ChainConfig {
+  ChainSplatting splatting = ChainSplatting::ExpectedValue;
+  double largeStepProb = 0;  // p_large, for KelemenMIS weights
+  double b = 0;              // normalization (KelemenMIS only; must be > 0 there)
+};
+
+struct ChainCounts {
+  uint64_t proposed[2] = {0, 0}, accepted[2] = {0, 0};  // index = MutationType
+};
+
+// Runs `mutations` steps from the current state x (already evaluated into `current`, target value cx > 0,
+// the state's start accepted). Buffers `current` and `scratch` are reused (no allocation once warm);
+// on return `current` holds the final state. acceptRng decides acceptance.
+ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& config, ChainSink& sink,
+                     Pcg32& acceptRng, uint64_t mutations, PathContribution& current, double cx,
+                     PathContribution& scratch);
+
+}  // namespace mlt

@@ -1,0 +1,56 @@
+#include "common/mlt/develop.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/core/rng.h"
+
+namespace mlt {
+
+double chainSplatScale(double b, uint64_t totalMutations, size_t pixels) {
+  return totalMutations > 0 ? b * double(pixels) / double(totalMutations) : 0.0;
+}
+
+double lengthWeightCorrection(double bk, uint64_t Mk, double b, uint64_t M) {
+  if (Mk == 0 || !(b > 0)) return 0.0;
+  return (bk / double(Mk)) / (b / double(M));
+}
+
+double directSplatPrescale(double b, uint64_t totalMutations, uint64_t directLightPaths) {
+  if (directLightPaths == 0) return 0.0;
+  if (!(b > 0) || totalMutations == 0) return 1.0;  // no chains: the scale (D1) is unused then
+  return double(totalMutations) / (b * double(directLightPaths));
+}
+
+namespace {
+double quantize(double v, uint64_t key) {
+  if (v == 0) return 0;
+  const double scaled = std::ldexp(v, kQuantumExp);
+  if (!(std::fabs(scaled) < 0x1p52))
+    throw std::runtime_error("quantizeFilm: sum " + std::to_string(v) + " too large to merge exactly");
+  const double lo = std::floor(scaled);
+  const double u = double(mix64(key) >> 11) * 0x1p-53;
+  return std::ldexp(u < scaled - lo ? lo + 1 : lo, -kQuantumExp);
+}
+}  // namespace
+
+void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
+  const uint64_t base = hashKeys(jobSeed, unitIndex, 0x71756e74ULL);
+  auto& splats = film.splatSums();
+  for (size_t i = 0; i < splats.size(); ++i) {
+    const uint64_t k = hashKeys(base, i);
+    splats[i].r = quantize(splats[i].r, k + 1);
+    splats[i].g = quantize(splats[i].g, k + 2);
+    splats[i].b = quantize(splats[i].b, k + 3);
+  }
+  auto& pixels = film.pixelSums();
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const uint64_t k = hashKeys(base, i, 1);
+    pixels[i].r = quantize(pixels[i].r, k + 1);
+    pixels[i].g = quantize(pixels[i].g, k + 2);
+    pixels[i].b = quantize(pixels[i].b, k + 3);
+  }
+}
+
+}  // namespace mlt

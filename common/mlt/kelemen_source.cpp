@@ -1,0 +1,144 @@
+#include "common/mlt/kelemen_source.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mlt {
+
+Pcg32 chainRng(uint64_t jobSeed, uint64_t chainIndex, uint64_t purpose) {
+  return Pcg32(hashKeys(jobSeed, chainIndex, purpose, 0x6d6c74636861696eULL), hashKeys(purpose, jobSeed, chainIndex));
+}
+
+namespace {
+
+// Smallest n with max_f |E[exp(2 pi i f dv)]|^n < 2^-30 for the exponential kernel's offset dv (random
+// sign, log-uniform magnitude in [s1, s2]). The density of the sum of n offsets mod 1 deviates from
+// uniform by at most 2 sum_f |phi_f|^n; beyond this n, drawing a uniform is exact to float precision and
+// saves applying thousands of pending steps to a coordinate that was unread for a long time.
+int64_t exponentialUniformAfter(float s1, float s2) {
+  const double l0 = std::log(double(s1)), l1 = std::log(double(s2));
+  double worst = 0;
+  for (int f = 1; f <= 16; ++f) {
+    const int n = 4096;
+    double sum = 0;
+    for (int i = 0; i < n; ++i) sum += std::cos(2 * M_PI * f * std::exp(l0 + (l1 - l0) * (i + 0.5) / n));
+    worst = std::fmax(worst, std::fabs(sum / n));
+  }
+  if (worst >= 1) return INT64_MAX;
+  return static_cast<int64_t>(std::ceil(-30 * std::log(2.0) / std::log(worst)));
+}
+
+inline float wrap01(double v) {
+  v -= std::floor(v);
+  const float f = static_cast<float>(v);
+  return f >= 1.0f ? 0.0f : f;
+}
+
+}  // namespace
+
+KelemenSource::KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint64_t chainIndex,
+                             uint64_t startCandidate)
+    : params_(params), candidate_(jobSeed, startCandidate), rng_(chainRng(jobSeed, chainIndex, 0)) {
+  if (!(params.largeStepProb >= 0 && params.largeStepProb <= 1))
+    throw std::invalid_argument("KelemenSource: largeStepProb " + std::to_string(params.largeStepProb) +
+                                " is outside [0, 1]");
+  if (params.kernel == SmallStepKernel::Kelemen && !(params.s1 > 0 && params.s2 >= params.s1 && params.s2 < 1))
+    throw std::invalid_argument("KelemenSource: need 0 < s1 <= s2 < 1 (s1 = " + std::to_string(params.s1) +
+                                ", s2 = " + std::to_string(params.s2) + ")");
+  if (params.kernel == SmallStepKernel::Gaussian && !(params.sigma > 0))
+    throw std::invalid_argument("KelemenSource: Gaussian sigma must be > 0 (got " + std::to_string(params.sigma) + ")");
+  logRatio_ = std::log(params.s2 / params.s1);
+  uniformAfter_ = params.kernel == SmallStepKernel::Kelemen ? exponentialUniformAfter(params.s1, params.s2) : 0;
+  for (auto& v : coords_) v.reserve(128);
+  touched_.reserve(256);
+}
+
+MutationType KelemenSource::startIteration() {
+  const MutationType t = rng_.uniform() < params_.largeStepProb ? MutationType::Large : MutationType::Small;
+  startIteration(t);
+  return t;
+}
+
+void KelemenSource::startIteration(MutationType type) {
+  ++iteration_;
+  largeStep_ = type == MutationType::Large;
+  touched_.clear();
+}
+
+void KelemenSource::accept() {
+  if (largeStep_) lastLargeStep_ = iteration_;
+  touched_.clear();
+}
+
+void KelemenSource::reject() {
+  if (iteration_ == 0) throw std::logic_error("KelemenSource::reject: the start state (iteration 0) cannot be rejected");
+  for (const Touched& t : touched_) {
+    Coord& c = coords_[t.stream][t.index];
+    c.value = c.backupValue;
+    c.modify = c.backupModify;
+  }
+  touched_.clear();
+  --iteration_;
+}
+
+KelemenSource::Coord& KelemenSource::coord(int stream, int index) {
+  auto& v = coords_[stream];
+  if (static_cast<size_t>(index) >= v.size()) v.resize(static_cast<size_t>(index) + 1);
+  return v[index];
+}
+
+float KelemenSource::read(int stream, int index) {
+  Coord& c = coord(stream, index);
+  if (c.modify == iteration_) return c.value;  // already brought up to date in this iteration
+  c.backupValue = c.value;
+  c.backupModify = c.modify;
+  touched_.push_back({stream, index});
+  if (c.modify == kNeverRead) {
+    // Iteration 0 replays the bootstrap candidate; later, an unread coordinate of the current state is
+    // an independent uniform (see the header), drawn from the chain's own stream.
+    c.value = iteration_ == 0 ? candidate_.valueAt(stream, index) : rng_.uniform();
+  } else if (largeStep_) {
+    c.value = rng_.uniform();
+  } else {
+    if (c.modify < lastLargeStep_) {
+      c.value = rng_.uniform();
+      c.modify = lastLargeStep_;
+    }
+    if (iteration_ > c.modify) c.value = mutate(c.value, iteration_ - c.modify);
+  }
+  c.modify = iteration_;
+  return c.value;
+}
+
+float KelemenSource::mutate(float v, int64_t n) {
+  if (params_.kernel == SmallStepKernel::Gaussian) {
+    // Box-Muller; sum of n N(0, sigma^2) steps = N(0, n sigma^2).
+    const double u1 = 1.0 - rng_.uniformDouble(), u2 = rng_.uniformDouble();
+    const double z = std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+    return wrap01(double(v) + params_.sigma * std::sqrt(double(n)) * z);
+  }
+  if (n >= uniformAfter_) return rng_.uniform();
+  for (int64_t i = 0; i < n; ++i) {
+    // Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
+    const float dv = params_.s2 * std::exp(-logRatio_ * rng_.uniform());
+    if (rng_.uniform() < 0.5f) {
+      v += dv;
+      if (v >= 1) v -= 1;
+    } else {
+      v -= dv;
+      if (v < 0) v += 1;
+      if (v >= 1) v = 0;  // -tiny + 1 rounds to 1.0f
+    }
+  }
+  return v;
+}
+
+std::vector<float> KelemenSource::storedValues(int stream) const {
+  std::vector<float> out;
+  out.reserve(coords_[stream].size());
+  for (const Coord& c : coords_[stream]) out.push_back(c.value);
+  return out;
+}
+
+}  // namespace mlt

@@ -1,0 +1,114 @@
+// KelemenSource: a Markov chain over the primary-sample vector with lazy mutation (Kelemen et al. 2002,
+// sec. 4 and 6; the iteration bookkeeping follows pbrt-v3's MLTSampler).
+//
+// State. Every coordinate (stream s, index j) stores its value, the iteration it was last modified, and a
+// backup of both. `iteration_` counts the accepted proposals ("time" in the paper; a rejected
+// proposal is undone and does not advance it), `lastLargeStep_` is the iteration of the last accepted
+// large step.
+//
+// Lazy mutation. A proposal conceptually mutates every coordinate of the infinite vector. Only the ones
+// the path evaluator reads are touched, when they are read:
+//   - large step: the coordinate is redrawn uniformly;
+//   - small step: if it was last modified before the last accepted large step it is first redrawn
+//     uniformly (that large step redrew it); then the n = iteration - modify pending small steps are
+//     applied at once: n exponential steps in sequence, or one Gaussian step of sigma * sqrt(n) (the sum
+//     of n independent N(0, sigma^2) is N(0, n sigma^2); wrapping to [0,1) commutes with summation).
+// A coordinate that has never been read: during the replay of the start state (iteration 0) it takes
+// the bootstrap candidate's value IndependentSource(jobSeed, candidate).valueAt(s, j); afterwards it is
+// a fresh uniform from the chain's own generator (the start state's unread coordinates are independent
+// uniforms, and uniform + any mutation mod 1 is uniform, so no pending steps need applying).
+//
+// accept() commits. reject() restores every coordinate touched by the proposal exactly (value, time
+// stamp, and "never read") from a touched list: O(touched), no allocation once the vectors have grown.
+//
+// Randomness. Mutation decisions, mutation offsets and fresh coordinates come from a Pcg32 seeded from
+// (job seed, chain index) only, never from the start candidate: two chains that start from the same
+// candidate follow different trajectories.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "common/core/rng.h"
+#include "common/sampler/sample_source.h"
+
+namespace mlt {
+
+enum class SmallStepKernel { Kelemen, Gaussian };
+
+struct KelemenParams {
+  float largeStepProb = 0.3f;
+  SmallStepKernel kernel = SmallStepKernel::Kelemen;
+  float s1 = 1.0f / 1024, s2 = 1.0f / 64;  // exponential kernel: |dv| = s2 * exp(-log(s2/s1) * u)
+  float sigma = 0.01f;                     // Gaussian kernel
+};
+
+// Mutation types the chain loop reports statistics for.
+enum class MutationType : int { Large = 0, Small = 1 };
+
+// The chain's random stream for (job seed, chain index); `purpose` separates independent streams
+// (0: sample source mutations, 1: acceptance decisions).
+Pcg32 chainRng(uint64_t jobSeed, uint64_t chainIndex, uint64_t purpose);
+
+class KelemenSource final : public SampleSource {
+ public:
+  KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint64_t chainIndex, uint64_t startCandidate);
+
+  // ---- chain protocol -------------------------------------------------------------------------
+  // Iteration 0 (after construction) replays the start candidate: evaluate once, then call accept().
+  // startIteration() begins a proposal: decides large or small step.
+  MutationType startIteration();
+  // Force the next proposal's type (tests; a chain loop that chooses the type itself).
+  void startIteration(MutationType type);
+  void accept();
+  void reject();
+  bool largeStep() const { return largeStep_; }
+  int64_t iteration() const { return iteration_; }
+
+  // ---- SampleSource -----------------------------------------------------------------------------
+  void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
+  void seek(int index) override { next_ = index; }
+  float next1D() override { return read(stream_, next_++); }
+
+  // Current value of a coordinate (applies pending mutations, exactly like next1D()).
+  float read(int stream, int index);
+  // The committed vector of one stream as stored (for tests: no pending mutations are applied).
+  std::vector<float> storedValues(int stream) const;
+  const KelemenParams& params() const { return params_; }
+
+  // Small-step kernel applied n times to v (n >= 1), exposed for tests of lazy == eager.
+  float mutate(float v, int64_t n);
+
+ private:
+  static constexpr int64_t kNeverRead = -1;
+  struct Coord {
+    float value = 0;
+    float backupValue = 0;
+    int64_t modify = kNeverRead;
+    int64_t backupModify = kNeverRead;
+  };
+  struct Touched { int stream, index; };
+
+  Coord& coord(int stream, int index);
+
+  KelemenParams params_;
+  IndependentSource candidate_;
+  Pcg32 rng_;
+  std::vector<Coord> coords_[kNumStreams];
+  std::vector<Touched> touched_;
+  int64_t iteration_ = 0, lastLargeStep_ = 0;
+  bool largeStep_ = false;
+  int stream_ = 0, next_ = 0;
+  float logRatio_;          // log(s2 / s1)
+  int64_t uniformAfter_;    // exponential kernel: after this many steps the offset is uniform to 2^-30
+};
+
+// ---- Room for what comes next (interfaces only; not implemented yet) ------------------------------
+// Reversible-jump MLT (Bitterli et al. 2017) needs a sample source whose coordinates can be *written*:
+// a path is inverted into the numbers that reproduce it, and a vertex's fixed block (see the dimension
+// map in sample_source.h) is rewritten alone. A writable Kelemen source would add
+//   void write(int stream, int index, float value);   // recorded on the touched list like a read
+// so that reject() still restores exactly, and the jump supplies its own T-ratio * |Jacobian| to the chain
+// loop (chain.h: Proposal::tRatio). Veach's path-space MLT keeps a path, not numbers: its state
+// implements ChainState (chain.h) directly with sampleSource() == nullptr.
+
+}  // namespace mlt
