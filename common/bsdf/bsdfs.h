@@ -1,0 +1,33 @@
+// Constructors of the concrete BSDFs (one file each; Mitsuba semantics). makeBsdf (render/bsdf.h,
+// make_bsdf.cpp) validates a BsdfDesc and calls these. All BSDFs work in the local shading frame with
+// wo and wi pointing away from the surface, z > 0 being the exterior / front side.
+#pragma once
+#include <memory>
+
+#include "common/bsdf/texture.h"
+#include "common/render/bsdf.h"
+#include "common/scene/scene_desc.h"
+
+namespace mlt {
+
+using TexturePtr = std::shared_ptr<const Texture>;
+
+// Lambertian, one-sided: zero unless both directions are on the front side.
+std::unique_ptr<Bsdf> makeDiffuse(TexturePtr reflectance);
+// Applies `nested` on both sides by mirroring back-side directions to the front.
+std::unique_ptr<Bsdf> makeTwoSided(std::unique_ptr<Bsdf> nested);
+// Smooth glass; eta = intIOR / extIOR.
+std::unique_ptr<Bsdf> makeDielectric(float eta, Color specularReflectance, Color specularTransmittance);
+// Thin slab of glass (no refraction, multiple internal reflections folded into R and T).
+std::unique_ptr<Bsdf> makeThinDielectric(float eta, Color specularReflectance, Color specularTransmittance);
+// Smooth metal; eta, k relative to the exterior; mirror = F is 1.
+std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, Color specularReflectance);
+std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType dist, float alpha, Color eta, Color k, bool mirror,
+                                         Color specularReflectance);
+std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType dist, float alpha, float eta, Color specularReflectance,
+                                          Color specularTransmittance);
+std::unique_ptr<Bsdf> makePlastic(float eta, TexturePtr diffuse, Color specularReflectance, bool nonlinear);
+std::unique_ptr<Bsdf> makeRoughPlastic(MicrofacetType dist, float alpha, float eta, TexturePtr diffuse,
+                                       Color specularReflectance, bool nonlinear);
+
+}  // namespace mlt

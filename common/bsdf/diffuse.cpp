@@ -1,0 +1,69 @@
+// Lambertian reflection (Mitsuba's `diffuse`) and the `twosided` adapter.
+#include "common/bsdf/bsdfs.h"
+#include "common/core/sampling.h"
+
+namespace mlt {
+
+namespace {
+
+class Diffuse final : public Bsdf {
+ public:
+  explicit Diffuse(TexturePtr rho) : rho_(std::move(rho)) {}
+
+  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
+    if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);
+    return rho_->eval(q.uv) * kInvPi;
+  }
+  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
+    if (wo.z <= 0 || wi.z <= 0) return 0;
+    return cosineHemispherePdfW(wi.z);
+  }
+  std::optional<BsdfSample> sample(const Vec3& wo, float, Vec2 uDir, const BsdfQuery& q) const override {
+    if (wo.z <= 0) return std::nullopt;
+    BsdfSample s;
+    s.wi = sampleCosineHemisphere(uDir);
+    if (s.wi.z <= 0) return std::nullopt;  // measure-zero grazing sample
+    s.f = rho_->eval(q.uv) * kInvPi;
+    s.pdfW = cosineHemispherePdfW(s.wi.z);
+    s.pdfRevW = cosineHemispherePdfW(wo.z);
+    return s;
+  }
+  bool isDelta() const override { return false; }
+  Color albedo(const Vec2& uv) const override { return rho_->eval(uv); }
+
+ private:
+  TexturePtr rho_;
+};
+
+// Mitsuba's twosided: directions on the back side are mirrored (z -> -z) so that the nested BSDF sees
+// the front. Transmissive BSDFs are rejected by makeBsdf (as Mitsuba does).
+class TwoSided final : public Bsdf {
+ public:
+  explicit TwoSided(std::unique_ptr<Bsdf> nested) : nested_(std::move(nested)) {}
+
+  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
+    return wo.z < 0 ? nested_->eval(flip(wo), flip(wi), q) : nested_->eval(wo, wi, q);
+  }
+  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
+    return wo.z < 0 ? nested_->pdf(flip(wo), flip(wi), q) : nested_->pdf(wo, wi, q);
+  }
+  std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2 ud, const BsdfQuery& q) const override {
+    if (wo.z >= 0) return nested_->sample(wo, uc, ud, q);
+    std::optional<BsdfSample> s = nested_->sample(flip(wo), uc, ud, q);
+    if (s) s->wi = flip(s->wi);
+    return s;
+  }
+  bool isDelta() const override { return nested_->isDelta(); }
+  Color albedo(const Vec2& uv) const override { return nested_->albedo(uv); }
+
+ private:
+  static Vec3 flip(const Vec3& w) { return {w.x, w.y, -w.z}; }
+  std::unique_ptr<Bsdf> nested_;
+};
+
+}  // namespace
+
+std::unique_ptr<Bsdf> makeDiffuse(TexturePtr reflectance) { return std::make_unique<Diffuse>(std::move(reflectance)); }
+std::unique_ptr<Bsdf> makeTwoSided(std::unique_ptr<Bsdf> nested) { return std::make_unique<TwoSided>(std::move(nested)); }
+
+}  // namespace mlt

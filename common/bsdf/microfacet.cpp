@@ -1,0 +1,138 @@
+#include "common/bsdf/microfacet.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mlt {
+
+namespace {
+constexpr double kSqrtPi = 1.77245385090551602730;
+constexpr double kPiD = 3.14159265358979323846;
+
+// Inverse error function: Giles' single-precision approximation refined by Newton steps on erf.
+double erfInv(double y) {
+  y = std::clamp(y, -1 + 1e-15, 1 - 1e-15);
+  double w = -std::log((1.0 - y) * (1.0 + y)), p;
+  if (w < 5.0) {
+    w = w - 2.5;
+    p = 2.81022636e-08;
+    p = 3.43273939e-07 + p * w;
+    p = -3.5233877e-06 + p * w;
+    p = -4.39150654e-06 + p * w;
+    p = 0.00021858087 + p * w;
+    p = -0.00125372503 + p * w;
+    p = -0.00417768164 + p * w;
+    p = 0.246640727 + p * w;
+    p = 1.50140941 + p * w;
+  } else {
+    w = std::sqrt(w) - 3;
+    p = -0.000200214257;
+    p = 0.000100950558 + p * w;
+    p = 0.00134934322 + p * w;
+    p = -0.00367342844 + p * w;
+    p = 0.00573950773 + p * w;
+    p = -0.0076224613 + p * w;
+    p = 0.00943887047 + p * w;
+    p = 1.00167406 + p * w;
+    p = 2.83297682 + p * w;
+  }
+  double x = p * y;
+  for (int i = 0; i < 2; ++i) {
+    const double d = 2 / kSqrtPi * std::exp(-x * x);
+    if (d <= 0) break;
+    x -= (std::erf(x) - y) / d;
+  }
+  return x;
+}
+}  // namespace
+
+float Microfacet::D(const Vec3& m) const {
+  if (m.z <= 0) return 0;
+  const double c2 = double(m.z) * m.z, tan2 = std::max(0.0, 1 - c2) / c2, a2 = double(alpha_) * alpha_;
+  if (type_ == MicrofacetType::GGX) {
+    const double t = 1 + tan2 / a2;
+    return float(1 / (kPiD * a2 * c2 * c2 * t * t));
+  }
+  return float(std::exp(-tan2 / a2) / (kPiD * a2 * c2 * c2));
+}
+
+float Microfacet::lambda(const Vec3& w) const {
+  const double c2 = double(w.z) * w.z;
+  if (c2 >= 1) return 0;
+  const double tan2 = (1 - c2) / c2;
+  if (type_ == MicrofacetType::GGX) return float(0.5 * (std::sqrt(1 + double(alpha_) * alpha_ * tan2) - 1));
+  // Beckmann: a = 1 / (alpha tan(theta)); Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2.
+  const double a = 1 / (alpha_ * std::sqrt(tan2));
+  return float(0.5 * (std::exp(-a * a) / (a * kSqrtPi) - std::erfc(a)));
+}
+
+Vec3 Microfacet::sampleVisible(const Vec3& v, Vec2 u) const {
+  return type_ == MicrofacetType::GGX ? sampleGGX(v, u) : sampleBeckmann(v, u);
+}
+
+// Heitz 2018, listing 1.
+Vec3 Microfacet::sampleGGX(const Vec3& v, Vec2 u) const {
+  const Vec3 vh = normalize(Vec3(alpha_ * v.x, alpha_ * v.y, v.z));
+  const float lensq = vh.x * vh.x + vh.y * vh.y;
+  const Vec3 t1 = lensq > 0 ? Vec3(-vh.y, vh.x, 0) / std::sqrt(lensq) : Vec3(1, 0, 0);
+  const Vec3 t2 = cross(vh, t1);
+  const float r = std::sqrt(u.x), phi = 2 * kPi * u.y;
+  const float p1 = r * std::cos(phi);
+  float p2 = r * std::sin(phi);
+  const float s = 0.5f * (1 + vh.z);
+  p2 = (1 - s) * std::sqrt(std::fmax(0.0f, 1 - p1 * p1)) + s * p2;
+  const Vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::fmax(0.0f, 1 - p1 * p1 - p2 * p2)) * vh;
+  return normalize(Vec3(alpha_ * nh.x, alpha_ * nh.y, std::fmax(1e-7f, nh.z)));
+}
+
+// Visible-normal sampling for Beckmann (Heitz & d'Eon 2014, sec. 4 and appendix; inversion as in
+// pbrt-v3's BeckmannSample11): sample slopes of the unit-roughness distribution seen from the
+// stretched direction, rotate, unstretch.
+Vec3 Microfacet::sampleBeckmann(const Vec3& v, Vec2 u) const {
+  const Vec3 vs = normalize(Vec3(alpha_ * v.x, alpha_ * v.y, v.z));
+  const double cosThetaI = vs.z;
+  const double u1 = std::clamp(double(u.x), 1e-9, 1 - 1e-9), u2 = std::clamp(double(u.y), 1e-9, 1 - 1e-9);
+  double slopeX, slopeY;
+  if (cosThetaI > 0.99999) {
+    const double r = std::sqrt(-std::log(1 - u1)), phi = 2 * kPiD * u2;
+    slopeX = r * std::cos(phi);
+    slopeY = r * std::sin(phi);
+  } else {
+    // CDF of slope_x for the visible distribution, in the erf domain b = erf(slope_x) in [-1, erf(cot)]:
+    // C(b) = (1 + b + tan/sqrt(pi) exp(-erfinv(b)^2)) / (1 + erf(cot) + tan/sqrt(pi) exp(-cot^2)).
+    const double sinThetaI = std::sqrt(std::max(0.0, 1 - cosThetaI * cosThetaI));
+    const double tanThetaI = sinThetaI / cosThetaI, cotThetaI = 1 / tanThetaI;
+    double a = -1, c = std::erf(cotThetaI);
+    const double thetaI = std::acos(cosThetaI);
+    const double fit = 1 + thetaI * (-0.876 + thetaI * (0.4265 - 0.0594 * thetaI));
+    double b = c - (1 + c) * std::pow(1 - u1, fit);
+    const double norm = 1 / (1 + c + tanThetaI / kSqrtPi * std::exp(-cotThetaI * cotThetaI));
+    for (int it = 0; it < 60; ++it) {
+      if (!(b >= a && b <= c)) b = 0.5 * (a + c);
+      const double x = erfInv(b);
+      const double value = norm * (1 + b + tanThetaI / kSqrtPi * std::exp(-x * x)) - u1;
+      const double derivative = norm * (1 - x * tanThetaI);
+      if (std::fabs(value) < 1e-10) break;
+      if (value > 0) c = b;
+      else a = b;
+      if (c - a < 1e-15) break;
+      b -= value / derivative;
+    }
+    slopeX = erfInv(b);
+    slopeY = erfInv(2 * u2 - 1);
+  }
+  // Rotate by the azimuth of the stretched direction, unstretch.
+  const double sinT = std::sqrt(std::max(0.0, 1 - cosThetaI * cosThetaI));
+  double cosPhi = 1, sinPhi = 0;
+  if (sinT > 0) {
+    cosPhi = std::clamp(vs.x / sinT, -1.0, 1.0);
+    sinPhi = std::clamp(vs.y / sinT, -1.0, 1.0);
+  }
+  const double sx = cosPhi * slopeX - sinPhi * slopeY;
+  const double sy = sinPhi * slopeX + cosPhi * slopeY;
+  const double mx = -alpha_ * sx, my = -alpha_ * sy;
+  const double len = std::sqrt(mx * mx + my * my + 1);
+  return {float(mx / len), float(my / len), float(1 / len)};
+}
+
+}  // namespace mlt

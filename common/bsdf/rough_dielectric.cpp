@@ -1,0 +1,123 @@
+// Rough dielectric interface (Mitsuba's `roughdielectric`; Walter et al. 2007, "Microfacet models for
+// refraction through rough surfaces"). eta = n_int / n_ext, z > 0 is the exterior.
+//
+// For a pair (wo, wi) let eta_o be the IOR on wo's side and eta_i on wi's (etaRel = eta_i / eta_o).
+//  reflection:   h = normalize(wo + wi)                          f = F D G / (4 |cos_o| |cos_i|)
+//  transmission: h = -normalize(wo + etaRel wi)  (eq. 16)        f = (1-F) D G etaRel^2 |wo.h| |wi.h|
+//                                                                    / (|cos_o| |cos_i| (wo.h + etaRel wi.h)^2)   (eq. 21)
+// with h flipped to the exterior side, F = F(wo.h), G = G1(wo,h) G1(wi,h). In Radiance mode the
+// transmitted value is multiplied by 1/etaRel^2 (radiance compression; Veach 1997, eq. 5.12), which makes
+// f_rad(wo, wi) = f_imp(wi, wo): the adjoint BSDF (Veach 1997, sec. 5.3).
+// Sampling: h from the visible normals seen from wo (mirrored to the exterior side), reflection with
+// probability F(wo.h) else refraction; pdfW = D_wo(h) {F | 1-F} |dh/dwi| with
+// dh/dwi = 1 / (4 |wi.h|) (eq. 14) or etaRel^2 |wi.h| / (wo.h + etaRel wi.h)^2 (eq. 17).
+#include <cmath>
+
+#include "common/bsdf/bsdfs.h"
+#include "common/bsdf/fresnel.h"
+#include "common/bsdf/microfacet.h"
+
+namespace mlt {
+
+namespace {
+
+class RoughDielectric final : public Bsdf {
+ public:
+  RoughDielectric(MicrofacetType t, float alpha, float eta, Color r, Color tr)
+      : mf_(t, alpha), eta_(eta), specR_(r), specT_(tr) {}
+
+  // The half vector of a pair, oriented to the exterior; false if the pair cannot be connected
+  // (grazing, back-facing microfacet, or degenerate).
+  struct Half {
+    Vec3 h;
+    bool reflect;
+    float etaRel;  // eta_i / eta_o (1 for reflection)
+  };
+  std::optional<Half> halfVector(const Vec3& wo, const Vec3& wi) const {
+    if (wo.z == 0 || wi.z == 0) return std::nullopt;
+    Half r;
+    r.reflect = wo.z * wi.z > 0;
+    r.etaRel = r.reflect ? 1.0f : (wo.z > 0 ? eta_ : 1 / eta_);
+    Vec3 h = wo + wi * r.etaRel;
+    const float len2 = lengthSquared(h);
+    if (!(len2 > 0)) return std::nullopt;
+    h = h / std::sqrt(len2);
+    if (h.z < 0) h = -h;
+    if (h.z == 0) return std::nullopt;
+    // Discard back-facing microfacets: each direction must be on the same side of h as of the macro normal.
+    if (dot(wo, h) * wo.z <= 0 || dot(wi, h) * wi.z <= 0) return std::nullopt;
+    r.h = h;
+    return r;
+  }
+
+  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
+    const std::optional<Half> hv = halfVector(wo, wi);
+    if (!hv) return Color(0.0f);
+    const Vec3& h = hv->h;
+    const float D = mf_.D(h);
+    if (D == 0) return Color(0.0f);
+    const float woh = dot(wo, h), wih = dot(wi, h);
+    const float F = fresnelDielectric(woh, eta_);
+    const float G = mf_.G(wo, wi, h);
+    const float cosO = std::fabs(wo.z), cosI = std::fabs(wi.z);
+    if (hv->reflect) return specR_ * (F * D * G / (4 * cosO * cosI));
+    const float e = hv->etaRel, denom = woh + e * wih;
+    float value = (1 - F) * D * G * e * e * std::fabs(woh * wih) / (cosO * cosI * denom * denom);
+    if (q.mode == TransportMode::Radiance) value /= e * e;
+    return specT_ * value;
+  }
+
+  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
+    const std::optional<Half> hv = halfVector(wo, wi);
+    if (!hv) return 0;
+    const Vec3& h = hv->h;
+    const float woh = dot(wo, h), wih = dot(wi, h);
+    const Vec3 woUp = wo.z > 0 ? wo : -wo;
+    const float pdfH = mf_.pdfVisible(woUp, h);
+    const float F = fresnelDielectric(woh, eta_);
+    if (hv->reflect) return pdfH * F / (4 * std::fabs(wih));
+    const float e = hv->etaRel, denom = woh + e * wih;
+    return pdfH * (1 - F) * e * e * std::fabs(wih) / (denom * denom);
+  }
+
+  std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2 uDir, const BsdfQuery& q) const override {
+    if (wo.z == 0) return std::nullopt;
+    const Vec3 woUp = wo.z > 0 ? wo : -wo;
+    const Vec3 m = mf_.sampleVisible(woUp, uDir);
+    float cosThetaT;
+    const float F = fresnelDielectric(dot(wo, m), eta_, &cosThetaT);
+    BsdfSample s;
+    if (uc < F) {
+      s.wi = reflectAbout(wo, m);
+      if (s.wi.z * wo.z <= 0) return std::nullopt;
+      s.eta = 1;
+    } else {
+      s.wi = normalize(refractAbout(wo, m, cosThetaT, eta_));
+      if (s.wi.z * wo.z >= 0) return std::nullopt;
+      s.eta = wo.z > 0 ? eta_ : 1 / eta_;
+    }
+    s.pdfW = pdf(wo, s.wi, q);
+    if (!(s.pdfW > 0)) return std::nullopt;
+    s.f = eval(wo, s.wi, q);
+    s.pdfRevW = pdf(s.wi, wo, q);
+    return s;
+  }
+
+  bool isDelta() const override { return false; }
+  Color albedo(const Vec2&) const override {
+    return {std::fmax(specR_.r, specT_.r), std::fmax(specR_.g, specT_.g), std::fmax(specR_.b, specT_.b)};
+  }
+
+ private:
+  Microfacet mf_;
+  float eta_;
+  Color specR_, specT_;
+};
+
+}  // namespace
+
+std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType t, float alpha, float eta, Color r, Color tr) {
+  return std::make_unique<RoughDielectric>(t, alpha, eta, r, tr);
+}
+
+}  // namespace mlt
