@@ -194,7 +194,7 @@ MeshDesc readPly(const std::string& path) {
   // ---- Body ----
   MeshDesc mesh;
   mesh.name = path;
-  PlyBody body(data, pos, line, format, path);
+  PlyBody body(data, pos, line + 1, format, path);  // data starts on the line after end_header
   bool haveVertices = false;
   for (const PlyElement& e : elements) {
     const bool isVertex = e.name == "vertex", isFace = e.name == "face";
