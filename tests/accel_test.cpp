@@ -9,6 +9,7 @@
 #include "common/core/rng.h"
 #include "common/core/sampling.h"
 #include "common/render/accel.h"
+#include "common/render/render_scene.h"
 
 namespace mlt {
 namespace {
@@ -200,6 +201,112 @@ TEST(Accel, RejectsBadIndices) {
   m = quad(0);
   m.normals = {{0, 0, 1}};
   EXPECT_THROW(Accel{std::vector<MeshDesc>{m}}, std::runtime_error);
+}
+
+// ---- RenderScene ----------------------------------------------------------------------------------
+// The box [-1,1]^3 (inward normals), an emitting quad under its ceiling facing down, a point light and a
+// constant environment.
+SceneDesc boxScene() {
+  SceneDesc d;
+  d.sourceFile = "test";
+  d.bsdfs.resize(2);
+  d.bsdfs[0].id = "white";
+  d.bsdfs[1].id = "lamp";
+  d.meshes.push_back(box());
+  d.meshes[0].bsdf = 0;
+  MeshDesc lamp;
+  lamp.name = "lamp";
+  lamp.positions = {{-0.2f, 0.9f, -0.2f}, {0.2f, 0.9f, -0.2f}, {0.2f, 0.9f, 0.2f}, {-0.2f, 0.9f, 0.2f}};
+  lamp.indices = {0, 1, 2, 0, 2, 3};  // normal -y: facing down into the box
+  lamp.bsdf = 1;
+  lamp.emission = Color(5);
+  d.meshes.push_back(lamp);
+  LightDesc point;
+  point.position = {0.5f, 0.5f, 0.5f};
+  d.lights.push_back(point);
+  LightDesc env;
+  env.type = LightDesc::Type::Constant;
+  d.lights.push_back(env);
+  d.camera.toWorld = Transform::lookAt({0, 0, 0.9f}, {0, 0, 0}, {0, 1, 0});
+  d.camera.width = d.camera.height = 16;
+  return d;
+}
+
+TEST(RenderScene, BuildsLightsAndFillsHitIndices) {
+  const auto scene = RenderScene::build(boxScene());
+  ASSERT_EQ(scene->lights().size(), 3u);  // point, constant, then the area light of mesh 1
+  EXPECT_TRUE(scene->light(0).deltaPosition());
+  ASSERT_EQ(scene->infiniteLights().size(), 1u);
+  EXPECT_EQ(scene->infiniteLights()[0], 1);
+  EXPECT_EQ(scene->lightSampler().size(), 3u);
+  EXPECT_NEAR(scene->radius(), std::sqrt(3.0f), 1e-5f);
+  EXPECT_NEAR(length(scene->center()), 0.0f, 1e-6f);
+  EXPECT_EQ(scene->camera().width(), 16);
+
+  Ray up;
+  up.o = {0, 0, 0};
+  up.d = {0, 1, 0};
+  auto h = scene->intersect(up);
+  ASSERT_TRUE(h);
+  EXPECT_EQ(h->meshId, 1u);
+  EXPECT_EQ(h->bsdf, 1);
+  EXPECT_EQ(h->light, 2);
+  EXPECT_FLOAT_EQ(h->t, 0.9f);
+  EXPECT_EQ(scene->light(h->light).L(h->p, h->ng, h->uv, -up.d).r, 5.0f);  // seen from below: front side
+  Ray down = up;
+  down.d = {0, -1, 0};
+  h = scene->intersect(down);
+  ASSERT_TRUE(h);
+  EXPECT_EQ(h->meshId, 0u);
+  EXPECT_EQ(h->bsdf, 0);
+  EXPECT_EQ(h->light, -1);
+}
+
+TEST(RenderScene, VisibilityWithOffsetsAndBlockers) {
+  const auto scene = RenderScene::build(boxScene());
+  const Vec3 floorP(0.1f, -1, 0.1f), floorN(0, 1, 0);
+  const Vec3 wallP(-1, -0.99f, 0.3f), wallN(1, 0, 0);  // near the floor-wall edge
+  EXPECT_TRUE(scene->visible(floorP, floorN, wallP, wallN));
+  EXPECT_TRUE(scene->visible(wallP, wallN, floorP, floorN));
+  // The lamp blocks the ceiling above it; a point light (zero normal) sees the floor.
+  EXPECT_FALSE(scene->visible(floorP, floorN, {0, 1, 0}, {0, -1, 0}));
+  EXPECT_TRUE(scene->visible(floorP, floorN, {0.5f, 0.5f, 0.5f}, {}));
+  // A point on the lamp's underside sees the floor.
+  EXPECT_TRUE(scene->visible({0, 0.9f, 0}, {0, -1, 0}, floorP, floorN));
+  // Random pairs of floor and wall points: all mutually visible (no self-intersection from offsets).
+  Pcg32 rng(3, 3);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 a(rng.uniform() * 2 - 1, -1, rng.uniform() * 2 - 1);
+    const Vec3 b(1, rng.uniform() * 2 - 1, rng.uniform() * 2 - 1);
+    ASSERT_TRUE(scene->visible(a, floorN, b, {-1, 0, 0})) << i;
+  }
+}
+
+TEST(RenderScene, RejectsInvalidScenes) {
+  auto expectError = [](const SceneDesc& d, const std::string& fragment) {
+    try {
+      RenderScene::build(d);
+      ADD_FAILURE() << "no error, expected: " << fragment;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  SceneDesc d = boxScene();
+  d.lights.clear();
+  d.meshes[1].emission.reset();
+  expectError(d, "scene has no emitters");
+  d = boxScene();
+  d.meshes[0].bsdf = 2;
+  expectError(d, "bsdf index 2 out of range");
+  d = boxScene();
+  d.meshes[1].positions[2].y = std::numeric_limits<float>::quiet_NaN();
+  expectError(d, "non-finite position");
+  d = boxScene();
+  d.camera.width = 0;
+  expectError(d, "width/height");
+  d = boxScene();
+  d.meshes[1].indices[5] = 17;
+  expectError(d, "out of range");
 }
 
 }  // namespace

@@ -249,13 +249,17 @@ TEST(SpotLight, FalloffMonotoneAndZeroBeyondCutoff) {
     const float I = light->sampleLi(ref, {0, 0})->L.r;
     const float deg = theta * 180 / kPi;
     EXPECT_LE(I, prev + 1e-6f) << deg;
-    if (deg < beam - 0.01f) EXPECT_NEAR(I, 5.0f, 1e-4f) << deg;
+    if (deg < beam - 0.01f) {
+      EXPECT_NEAR(I, 5.0f, 1e-4f) << deg;
+    }
     if (deg > beam + 0.01f && deg < cutoff - 0.01f) {
       EXPECT_LT(I, 5.0f) << deg;
       EXPECT_GT(I, 0.0f) << deg;
       EXPECT_NEAR(I, 5 * (cutoff - deg) / (cutoff - beam), 1e-2f) << deg;  // Mitsuba: linear in angle
     }
-    if (deg >= cutoff) EXPECT_EQ(I, 0.0f) << deg;
+    if (deg >= cutoff) {
+      EXPECT_EQ(I, 0.0f) << deg;
+    }
     prev = I;
   }
 }
