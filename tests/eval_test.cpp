@@ -1,0 +1,246 @@
+// The evaluation harness: metrics on synthetic images (exact values), statistics, outlier / bias / stuck
+// detection on synthetic runs, CSV round trip, and (see eval_e2e section) the harness end to end on a
+// tiny scene with a deliberately biased method and an injected outlier run.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/core/rng.h"
+#include "tools/eval/error_map.h"
+#include "tools/eval/harness.h"
+#include "tools/eval/metrics.h"
+#include "tools/eval/run_record.h"
+#include "tools/eval/stability.h"
+#include "tools/eval/stats.h"
+
+namespace mlt::eval {
+namespace {
+
+// ---- Metrics -------------------------------------------------------------------------------------------
+
+TEST(EvalMetrics, ExactValuesOnTwoPixels) {
+  // Reference (1,1,1), (0,0,0); image (2,1,1), (0.1,0,0). Per channel differences: 1,0,0, 0.1,0,0.
+  std::vector<Color> ref{{1, 1, 1}, {0, 0, 0}}, img{{2, 1, 1}, {0.1f, 0, 0}};
+  const double eps = 1e-2;
+  ImageMetrics m = computeMetrics(img, ref, eps);
+  double d2 = double(0.1f) * double(0.1f);
+  EXPECT_NEAR(m.relMSE, (1.0 / (1 + eps) + d2 / eps) / 6, 1e-12);
+  EXPECT_NEAR(m.mse, (1.0 + d2) / 6, 1e-12);
+  EXPECT_NEAR(m.mae, (1.0 + double(0.1f)) / 6, 1e-12);
+  EXPECT_NEAR(m.refMean, 0.5, 1e-12);
+  EXPECT_NEAR(m.mean, (4.0 + double(0.1f)) / 6, 1e-12);
+  EXPECT_NEAR(m.meanErr, ((4.0 + double(0.1f)) / 6 - 0.5) / 0.5, 1e-12);
+  EXPECT_EQ(m.nonFinite, 0u);
+}
+
+TEST(EvalMetrics, ScaledImageHasExactRelativeBrightnessError) {
+  std::vector<Color> ref, img;
+  Pcg32 rng(7, 1);
+  for (int i = 0; i < 100; ++i) {
+    Color c(rng.uniform() + 0.1f, rng.uniform(), rng.uniform() * 3);
+    ref.push_back(c);
+    img.push_back(c * 1.05f);
+  }
+  ImageMetrics m = computeMetrics(img, ref);
+  EXPECT_NEAR(m.meanErr, 0.05, 1e-6);
+  ImageMetrics same = computeMetrics(ref, ref);
+  EXPECT_EQ(same.relMSE, 0);
+  EXPECT_EQ(same.mse, 0);
+  EXPECT_EQ(same.meanErr, 0);
+}
+
+TEST(EvalMetrics, NonFiniteValuesAreCountedAndExcluded) {
+  std::vector<Color> ref{{1, 1, 1}, {1, 1, 1}}, img{{1, 1, 1}, {NAN, 1, INFINITY}};
+  ImageMetrics m = computeMetrics(img, ref);
+  EXPECT_EQ(m.nonFinite, 2u);
+  EXPECT_EQ(m.mse, 0);
+  EXPECT_THROW(computeMetrics(img, std::vector<Color>(3)), std::invalid_argument);
+  auto map = relativeErrorMap(img, ref);
+  EXPECT_EQ(map[0], 0.f);
+  EXPECT_TRUE(std::isinf(map[1]));
+}
+
+TEST(EvalMetrics, ReferenceNoiseFloorMatchesKnownVariance) {
+  // K parts = truth + independent Gaussian noise of sigma; the estimated variance of the mean must
+  // match sigma^2 / K within its own sampling error (chi-square with P*3*(K-1) dof).
+  const int K = 4, P = 4000;
+  const double sigma = 0.1;
+  std::vector<std::vector<Color>> parts(K, std::vector<Color>(P));
+  Pcg32 rng(11, 1);
+  auto gauss = [&] {  // Box-Muller
+    double u1 = std::max(double(rng.uniform()), 1e-12), u2 = rng.uniform();
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  };
+  for (int k = 0; k < K; ++k)
+    for (int i = 0; i < P; ++i)
+      for (int c = 0; c < 3; ++c) parts[k][i][c] = float(1.0 + sigma * gauss());
+  ReferenceEstimate est = estimateReference(parts, 1e-2);
+  double expectedMse = sigma * sigma / K;
+  double relSe = std::sqrt(2.0 / (3.0 * P * (K - 1)));  // relative std. error of a pooled variance
+  EXPECT_NEAR(est.noise.mseFloor / expectedMse, 1.0, 5 * relSe);
+  EXPECT_NEAR(est.noise.relMSEFloor, est.noise.mseFloor / (1 + 1e-2), 0.05 * est.noise.mseFloor);
+  EXPECT_EQ(est.noise.parts, K);
+  EXPECT_GT(est.noise.meanRelStdErr, 0);
+  EXPECT_THROW(estimateReference({parts[0]}), std::invalid_argument);
+}
+
+// ---- Statistics ----------------------------------------------------------------------------------------
+
+TEST(EvalStats, MomentsAndRobustScale) {
+  std::vector<double> x{1, 2, 3, 4, 100};
+  EXPECT_DOUBLE_EQ(mean(x), 22);
+  EXPECT_DOUBLE_EQ(median(x), 3);
+  EXPECT_DOUBLE_EQ(mad(x), 1);
+  EXPECT_NEAR(stddev({1, 2, 3}), 1.0, 1e-15);
+  EXPECT_THROW(mean({}), std::invalid_argument);
+}
+
+TEST(EvalStats, StudentTAndChiSquareTails) {
+  // Known quantiles: t(1) is Cauchy, P(|T| > 1) = 0.5; t(5) two-sided 5% point 2.570582; t(10) 1% point 3.169273.
+  EXPECT_NEAR(studentTwoSidedP(1.0, 1), 0.5, 1e-10);
+  EXPECT_NEAR(studentTwoSidedP(2.570582, 5), 0.05, 1e-6);
+  EXPECT_NEAR(studentTwoSidedP(-3.169273, 10), 0.01, 1e-6);
+  EXPECT_NEAR(studentTwoSidedP(0, 3), 1.0, 1e-12);
+  // chi^2(2): P(X > x) = exp(-x/2); chi^2(4) 5% point 9.487729.
+  EXPECT_NEAR(chiSquareUpperEvenDof(3.0, 2), std::exp(-1.5), 1e-14);
+  EXPECT_NEAR(chiSquareUpperEvenDof(9.487729, 4), 0.05, 1e-6);
+  // Fisher: one p-value combines to itself.
+  EXPECT_NEAR(fisherCombine({0.03}), 0.03, 1e-12);
+  EXPECT_LT(fisherCombine({0.01, 0.01}), 0.01);
+}
+
+// ---- Stability on synthetic runs ---------------------------------------------------------------------
+
+// R runs of one method at two budgets; relMSE ~ base / budget with +-10% noise, mean error ~ N(bias, sd).
+std::vector<RunRecord> syntheticRuns(const std::string& method, int R, double bias, double sd, uint64_t seed) {
+  std::vector<RunRecord> runs;
+  Pcg32 rng(seed, 1);
+  for (int bi = 0; bi < 2; ++bi)
+    for (int r = 0; r < R; ++r) {
+      RunRecord rec;
+      rec.scene = "synthetic";
+      rec.method = method;
+      rec.budgetIndex = bi;
+      rec.budget = 1 << bi;
+      rec.run = r;
+      rec.metrics.relMSE = 0.01 / rec.budget * (0.9 + 0.2 * rng.uniform());
+      double u1 = std::max(double(rng.uniform()), 1e-12), u2 = rng.uniform();
+      rec.metrics.meanErr = bias + sd * std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+      runs.push_back(rec);
+    }
+  return runs;
+}
+
+TEST(EvalStability, BiasedMethodIsFlaggedUnbiasedIsNot) {
+  auto runs = syntheticRuns("good", 6, 0.0, 0.01, 1);
+  auto biased = syntheticRuns("scaled", 6, 0.05, 0.01, 2);
+  runs.insert(runs.end(), biased.begin(), biased.end());
+  StabilityReport rep = analyzeStability(runs, {{"synthetic", ReferenceNoise{4, 1e-4, 1e-4, 0.002}}});
+  ASSERT_EQ(rep.verdicts.size(), 2u);
+  EXPECT_FALSE(rep.verdicts[0].biased) << rep.verdicts[0].biasP;
+  EXPECT_TRUE(rep.verdicts[0].ok());
+  EXPECT_TRUE(rep.verdicts[1].biased);
+  EXPECT_NEAR(rep.verdicts[1].bias, 0.05, 5 * rep.verdicts[1].biasStdErr);
+}
+
+TEST(EvalStability, ReferenceNoiseExplainsSmallBrightnessOffsets) {
+  // A 3% offset that the reference's own 2% std. error explains is not called bias.
+  auto runs = syntheticRuns("m", 6, 0.03, 0.001, 3);
+  StabilityReport noisyRef = analyzeStability(runs, {{"synthetic", ReferenceNoise{4, 0, 0, 0.02}}});
+  EXPECT_FALSE(noisyRef.verdicts[0].biased);
+  StabilityReport exactRef = analyzeStability(runs, {{"synthetic", ReferenceNoise{4, 0, 0, 0.0}}});
+  EXPECT_TRUE(exactRef.verdicts[0].biased);
+}
+
+TEST(EvalStability, InjectedOutlierRunIsFlagged) {
+  auto runs = syntheticRuns("m", 5, 0.0, 0.01, 4);
+  runs[2].metrics.relMSE *= 30;  // budget 0, run 2
+  StabilityReport rep = analyzeStability(runs, {});
+  int flagged = 0;
+  for (const RunRecord& r : runs) flagged += !r.flags.empty();
+  EXPECT_EQ(flagged, 1);
+  EXPECT_EQ(runs[2].flags.size(), 1u);
+  EXPECT_EQ(runs[2].flags[0].rfind("outlier", 0), 0u) << runs[2].flags[0];
+  EXPECT_EQ(rep.verdicts[0].outlierRuns, 1);
+  EXPECT_FALSE(rep.verdicts[0].ok());
+}
+
+TEST(EvalStability, DimRunIsFlaggedForMissingTransport) {
+  auto runs = syntheticRuns("m", 8, 0.0, 0.005, 5);
+  runs[3].metrics.meanErr = -0.2;  // one run lost a fifth of the light
+  analyzeStability(runs, {});
+  bool found = false;
+  for (const auto& f : runs[3].flags) found |= f.rfind("brightness", 0) == 0;
+  EXPECT_TRUE(found);
+  for (size_t i = 0; i < runs.size(); ++i)
+    if (i != 3) EXPECT_TRUE(runs[i].flags.empty()) << i << ": " << runs[i].flags[0];
+}
+
+TEST(EvalStability, StuckPathLengthIsFlagged) {
+  auto runs = syntheticRuns("mmlt", 3, 0.0, 0.01, 6);
+  for (RunRecord& r : runs) {
+    r.markovChain = true;
+    r.proposedPerLength = {0, 0, 50000, 40000};
+    r.acceptedPerLength = {0, 0, 20000, 15000};
+  }
+  runs[1].acceptedPerLength[3] = 2;  // length 3 practically never accepts in run 1
+  StabilityReport rep = analyzeStability(runs, {});
+  ASSERT_FALSE(runs[1].flags.empty());
+  EXPECT_NE(runs[1].flags[0].find("k=3"), std::string::npos) << runs[1].flags[0];
+  EXPECT_EQ(rep.verdicts[0].stuckRuns, 1);
+  EXPECT_TRUE(runs[0].flags.empty());
+}
+
+// ---- Tables and maps -----------------------------------------------------------------------------------
+
+TEST(EvalCsv, RunsRoundTrip) {
+  auto runs = syntheticRuns("pt,quoted\"name", 2, 0, 0.01, 7);
+  runs[0].flags = {"outlier:x", "stuck:k=3"};
+  runs[1].markovChain = true;
+  runs[1].acceptance = 0.25;
+  std::stringstream ss;
+  writeRunsCsv(ss, runs);
+  auto back = readRunsCsv(ss);
+  ASSERT_EQ(back.size(), runs.size());
+  EXPECT_EQ(back[0].method, runs[0].method);
+  EXPECT_EQ(back[0].flags, runs[0].flags);
+  EXPECT_DOUBLE_EQ(back[1].acceptance, 0.25);
+  EXPECT_FALSE(back[0].markovChain);
+  EXPECT_NEAR(back[2].metrics.relMSE, runs[2].metrics.relMSE, 1e-8 * runs[2].metrics.relMSE);
+  std::stringstream bad("scene,method\n");
+  EXPECT_THROW(readRunsCsv(bad), std::runtime_error);
+}
+
+TEST(EvalErrorMap, RampIsMonotoneInBrightness) {
+  float prev = -1;
+  for (int i = 0; i <= 20; ++i) {
+    Color c = errorRampSrgb(i / 20.f);
+    float y = luminance(c);
+    EXPECT_GT(y, prev);
+    prev = y;
+  }
+  auto img = errorMapImage({0.f, 1e-4f, 10.f, INFINITY});
+  EXPECT_EQ(luminance(img[0]), luminance(img[1]));  // 0 and 10^-4 are both the bottom of the ramp
+  EXPECT_GT(luminance(img[2]), 0.8f);
+}
+
+TEST(EvalHarness, MethodSpecs) {
+  MethodSpec a = parseMethodSpec("pt");
+  EXPECT_EQ(a.label, "pt");
+  EXPECT_EQ(a.method, Method::PT);
+  MethodSpec b = parseMethodSpec("pt-biased=pt*1.05");
+  EXPECT_EQ(b.label, "pt-biased");
+  EXPECT_DOUBLE_EQ(b.testScale, 1.05);
+  EXPECT_EQ(parseMethodSpec("mmlt").method, Method::MMLT);
+  EXPECT_THROW(parseMethodSpec("nope"), std::invalid_argument);
+  EXPECT_THROW(parseMethodSpec("x=pt*abc"), std::invalid_argument);
+  EXPECT_THROW(parseMethodSpec("=pt"), std::invalid_argument);
+  EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 0, 1));
+  EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 1, 0));
+}
+
+}  // namespace
+}  // namespace mlt::eval

@@ -1,0 +1,134 @@
+#include "tools/eval/run_record.h"
+
+#include <istream>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace mlt::eval {
+
+std::string csvQuote(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::vector<std::string> csvSplit(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        fields.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        fields.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.emplace_back();
+    } else if (c != '\r') {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
+static const char* kRunsHeader =
+    "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
+    "acceptance,chains,stuck_chains,non_finite,flags";
+
+static std::string joinFlags(const std::vector<std::string>& flags) {
+  std::string s;
+  for (const auto& f : flags) s += (s.empty() ? "" : ";") + f;
+  return s;
+}
+
+void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
+  os << kRunsHeader << "\n";
+  for (const RunRecord& r : runs) {
+    const ImageMetrics& m = r.metrics;
+    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{}\n",
+                      csvQuote(r.scene), csvQuote(r.method), r.mode, r.budgetIndex, r.budget, r.run, r.seed,
+                      r.seconds, r.work, r.samples, m.relMSE, m.mse, m.mae, m.meanErr,
+                      r.markovChain ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
+                      r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)));
+  }
+}
+
+void writeAcceptanceCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
+  os << "scene,method,mode,budget_index,budget,run,path_length,proposed,accepted\n";
+  for (const RunRecord& r : runs) {
+    if (!r.markovChain) continue;
+    for (size_t k = 0; k < r.proposedPerLength.size(); ++k) {
+      uint64_t acc = k < r.acceptedPerLength.size() ? r.acceptedPerLength[k] : 0;
+      if (r.proposedPerLength[k] == 0) continue;
+      os << fmt::format("{},{},{},{},{},{},{},{},{}\n", csvQuote(r.scene), csvQuote(r.method), r.mode,
+                        r.budgetIndex, r.budget, r.run, k, r.proposedPerLength[k], acc);
+    }
+  }
+}
+
+void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs) {
+  os << "scene,source,parts,relMSE_floor,MSE_floor,mean_rel_stderr,seconds,cached\n";
+  for (const ReferenceInfo& r : refs)
+    os << fmt::format("{},{},{},{:.9g},{:.9g},{:.9g},{:.3f},{}\n", csvQuote(r.scene), csvQuote(r.source),
+                      r.noise.parts, r.noise.relMSEFloor, r.noise.mseFloor, r.noise.meanRelStdErr, r.seconds,
+                      r.cached ? 1 : 0);
+}
+
+std::vector<RunRecord> readRunsCsv(std::istream& is) {
+  std::string line;
+  if (!std::getline(is, line) || line != kRunsHeader)
+    throw std::runtime_error("runs.csv line 1: unexpected header (expected '" + std::string(kRunsHeader) + "')");
+  std::vector<RunRecord> runs;
+  int lineNo = 1;
+  while (std::getline(is, line)) {
+    ++lineNo;
+    if (line.empty()) continue;
+    auto f = csvSplit(line);
+    if (f.size() != 19)
+      throw std::runtime_error(fmt::format("runs.csv line {}: expected 19 fields, got {}", lineNo, f.size()));
+    try {
+      RunRecord r;
+      r.scene = f[0];
+      r.method = f[1];
+      r.mode = f[2];
+      r.budgetIndex = std::stoi(f[3]);
+      r.budget = std::stod(f[4]);
+      r.run = std::stoi(f[5]);
+      r.seed = std::stoull(f[6]);
+      r.seconds = std::stod(f[7]);
+      r.work = std::stod(f[8]);
+      r.samples = std::stoull(f[9]);
+      r.metrics.relMSE = std::stod(f[10]);
+      r.metrics.mse = std::stod(f[11]);
+      r.metrics.mae = std::stod(f[12]);
+      r.metrics.meanErr = std::stod(f[13]);
+      r.markovChain = !f[14].empty();
+      r.acceptance = r.markovChain ? std::stod(f[14]) : -1;
+      r.chains = std::stoi(f[15]);
+      r.stuckChains = std::stoi(f[16]);
+      r.metrics.nonFinite = std::stoull(f[17]);
+      std::stringstream flags(f[18]);
+      for (std::string flag; std::getline(flags, flag, ';');)
+        if (!flag.empty()) r.flags.push_back(flag);
+      runs.push_back(std::move(r));
+    } catch (const std::logic_error& e) {
+      throw std::runtime_error(fmt::format("runs.csv line {}: bad number ({})", lineNo, e.what()));
+    }
+  }
+  return runs;
+}
+
+}  // namespace mlt::eval
