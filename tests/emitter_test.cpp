@@ -358,6 +358,8 @@ TEST(MakeLight, DispatchesAndValidates) {
   d.type = LightDesc::Type::Spot;
   d.direction = {0, 0, 2};
   EXPECT_TRUE(makeLight(d)->deltaPosition());
+  d.beamWidthDeg = d.cutoffAngleDeg + 1;
+  EXPECT_THROW(makeLight(d), std::runtime_error);
   d.type = LightDesc::Type::Constant;
   EXPECT_TRUE(makeLight(d)->infinite());
   d.type = LightDesc::Type::Directional;

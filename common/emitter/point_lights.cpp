@@ -3,6 +3,7 @@
 // hit, so pdfLi = 0; sampleLe's pdfPos = 1 and L is the intensity in the sampled direction.
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "common/core/sampling.h"
 #include "common/emitter/light_factories.h"
@@ -55,7 +56,7 @@ class SpotLight final : public Light {
   SpotLight(const Vec3& p, const Vec3& axis, const Color& I, float cutoffDeg, float beamDeg)
       : p_(p), frame_(axis), I_(I) {
     cutoff_ = cutoffDeg * kPi / 180;
-    beam_ = std::min(beamDeg, cutoffDeg) * kPi / 180;  // Mitsuba clamps the beam width to the cutoff
+    beam_ = beamDeg * kPi / 180;
     cosCutoff_ = std::cos(cutoff_);
     cosBeam_ = std::cos(beam_);
   }
@@ -124,6 +125,9 @@ std::unique_ptr<Light> makeSpotLight(const Vec3& position, const Vec3& axis, con
   if (!(cutoffDeg > 0 && cutoffDeg < 180))
     throw std::runtime_error("spot light: cutoff_angle must be in (0, 180) degrees");
   if (!(beamWidthDeg >= 0)) throw std::runtime_error("spot light: beam_width must be >= 0 degrees");
+  if (beamWidthDeg > cutoffDeg)  // Mitsuba asserts cutoff_angle >= beam_width
+    throw std::runtime_error("spot light: beam_width (" + std::to_string(beamWidthDeg) + ") exceeds cutoff_angle (" +
+                             std::to_string(cutoffDeg) + ")");
   const float len = length(axis);
   if (!(len > 0) || !std::isfinite(len)) throw std::runtime_error("spot light: direction has zero length");
   return std::make_unique<SpotLight>(position, axis / len, I, cutoffDeg, beamWidthDeg);
