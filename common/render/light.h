@@ -25,7 +25,8 @@ struct LightLiSample {     // next-event estimation: a point on the light as see
 
 struct LightLeSample {     // emission: a ray leaving the light (light subpath start)
   Color L;                 // emitted radiance along the ray (intensity for point/spot)
-  Ray ray;
+  Ray ray;                 // o = the exact point on the light (the vertex); area lights set tMin > 0 to
+                           // skip their own surface, so the ray can be traced as is
   Vec3 nLight;             // zero for point/spot
   float pdfPos = 0;        // pdfA of the origin (1 for delta position; for infinite lights the pdf of the
                            // point on the disk perpendicular to the direction, 1 / (pi R^2))
