@@ -607,6 +607,22 @@ TEST(MitsubaLoader, BsdfTypesAndParameters) {
   EXPECT_EQ(s.referencedFiles.size(), 1u);
 }
 
+TEST(MitsubaLoader, NamedRefsToBsdfs) {
+  TempDir d;
+  const SceneDesc s = loadBody(d, R"(
+  <bsdf type="diffuse" id="w"><rgb name="reflectance" value="0.3"/></bsdf>
+  <bsdf type="twosided" id="two"><ref name="bsdf" id="w"/></bsdf>
+  <shape type="cube"><ref name="bsdf" id="two"/></shape>
+  <shape type="cube"><bsdf type="diffuse" name="bsdf" id="inline"/></shape>
+  <shape type="cube"><ref id="inline"/></shape>
+)");
+  ASSERT_EQ(s.meshes.size(), 3u);
+  EXPECT_EQ(s.bsdfs.at(s.meshes[0].bsdf).id, "two");
+  EXPECT_EQ(s.bsdfs.at(s.bsdfs.at(s.meshes[0].bsdf).nested).id, "w");
+  EXPECT_EQ(s.meshes[2].bsdf, s.meshes[1].bsdf);
+  EXPECT_TRUE(s.warnings.size() == 1u);  // only: no sensor
+}
+
 // ------------------------------------------------------------------------------------------------------
 // Emitters
 // ------------------------------------------------------------------------------------------------------

@@ -205,6 +205,7 @@ int Loader::parseBsdf(const XmlElement& el) {
     if (!props.has("reflectance")) d.reflectance.value = Color(0.5f);
   } else if (type == "twosided") {
     d.type = T::TwoSided;
+    for (const auto& [name, p] : props.takeKind(Prop::Kind::Ref)) nested.push_back(p->el);
     if (nested.size() != 1 || (nested[0]->name != "bsdf" && nested[0]->name != "ref"))
       failAt(el, "twosided needs exactly one nested <bsdf> or <ref> (different front/back BSDFs are not supported)");
     d.nested = nested[0]->name == "bsdf" ? parseBsdf(*nested[0]) : bsdfFromRef(*nested[0]);

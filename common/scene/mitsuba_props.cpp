@@ -356,6 +356,17 @@ void PropertyList::ignore(std::initializer_list<const char*> names) {
   }
 }
 
+std::vector<std::pair<std::string, const Prop*>> PropertyList::takeKind(Prop::Kind kind) {
+  std::vector<std::pair<std::string, const Prop*>> out;
+  for (auto& [name, p] : props_)
+    if (p.kind == kind) {
+      p.used = true;
+      out.emplace_back(name, &p);
+    }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.second->el->line < b.second->el->line; });
+  return out;
+}
+
 void PropertyList::ignoreAll() {
   for (auto& kv : props_) kv.second.used = true;
 }

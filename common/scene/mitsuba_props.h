@@ -77,6 +77,9 @@ class PropertyList {
   Color getColor(const std::string& name, Color def) { return optColor(name).value_or(def); }
   std::optional<Transform> optTransform(const std::string& name);
 
+  // Every property of `kind` (e.g. named <ref>s), in document order; marks them used.
+  std::vector<std::pair<std::string, const Prop*>> takeKind(Prop::Kind kind);
+
   // Accepts these parameters without using them (they do not change the rendered image).
   void ignore(std::initializer_list<const char*> names);
   void ignoreAll();

@@ -64,6 +64,8 @@ void Loader::parseShape(const XmlElement& el) {
   else if (!analytic && mesh.normals.empty()) computeSmoothNormals(mesh);  // as Mitsuba does for meshes
   if (props.getBool("flip_normals", false)) flipMesh(mesh);
 
+  // <ref name="bsdf" id=".."/> (3.x style) arrives as a named property; unnamed refs and <bsdf>s are nested.
+  for (const auto& [name, p] : props.takeKind(Prop::Kind::Ref)) nested.push_back(p->el);
   for (const XmlElement* n : nested) {
     if (n->name == "bsdf" || n->name == "ref") {
       if (mesh.bsdf >= 0) failAt(*n, "the shape already has a bsdf");
