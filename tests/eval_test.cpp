@@ -8,9 +8,15 @@
 #include <fstream>
 #include <sstream>
 
+#include <spdlog/spdlog.h>
+
 #include "common/core/rng.h"
+#include "common/render/render_scene.h"
+#include "common/scene/mitsuba_loader.h"
 #include "tools/eval/error_map.h"
 #include "tools/eval/harness.h"
+#include "tools/eval/job_runner.h"
+#include "tools/eval/reference.h"
 #include "tools/eval/metrics.h"
 #include "tools/eval/run_record.h"
 #include "tools/eval/stability.h"
@@ -240,6 +246,162 @@ TEST(EvalHarness, MethodSpecs) {
   EXPECT_THROW(parseMethodSpec("=pt"), std::invalid_argument);
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 0, 1));
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 1, 0));
+}
+
+// ---- End to end (quick mode) -------------------------------------------------------------------------
+// The harness on the bundled furnace scene (16x16, every pixel the same analytic value) in equal-samples
+// mode, so the runs are deterministic: pt, a copy of pt whose images are scaled by 1.05 (must be flagged
+// biased), a copy of pt whose run 1 has its error amplified 10x (must be flagged unstable, that run
+// only), and pssmlt (exercises the chain statistics). Every label gets its own job seeds.
+
+std::string tempDir(const std::string& name) {
+  auto dir = std::filesystem::temp_directory_path() / ("mltfarm_eval_test_" + name);
+  std::filesystem::remove_all(dir);
+  return dir.string();
+}
+
+EvalConfig quickConfig(const std::string& out) {
+  spdlog::set_level(spdlog::level::warn);
+  EvalConfig cfg;
+  EvalScene es;
+  es.name = "furnace";
+  es.desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/furnace-sphere.xml");
+  cfg.scenes.push_back(std::move(es));
+  cfg.base.width = cfg.base.height = 16;
+  cfg.base.bootstrapSamples = 10000;
+  cfg.reference.spp = 64;
+  cfg.reference.parts = 4;
+  cfg.cacheReferences = false;
+  cfg.runs = 5;
+  cfg.equalSamples = true;
+  cfg.budgets = {2, 8};
+  cfg.outDir = out;
+  cfg.charts = false;
+  cfg.verbose = false;
+  cfg.seed = 20240611;
+  return cfg;
+}
+
+const MethodVerdict& verdictOf(const EvalResult& r, const std::string& method) {
+  for (const MethodVerdict& v : r.stability.verdicts)
+    if (v.method == method) return v;
+  throw std::runtime_error("no verdict for " + method);
+}
+
+TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
+  const std::string out = tempDir("quick");
+  EvalConfig cfg = quickConfig(out);
+  for (const char* m : {"pt", "pt-biased=pt*1.05", "pt-outlier=pt", "pssmlt"}) cfg.methods.push_back(parseMethodSpec(m));
+  cfg.injectOutlier = OutlierInjection{"pt-outlier", -1, 1, 10.0};
+  EvalResult result = runEval(cfg);
+  ASSERT_EQ(result.runs.size(), 4u * 2u * 5u);
+
+  const MethodVerdict& pt = verdictOf(result, "pt");
+  EXPECT_TRUE(pt.ok()) << pt.problems[0];
+  const MethodVerdict& biased = verdictOf(result, "pt-biased");
+  EXPECT_TRUE(biased.biased) << "p=" << biased.biasP << " bias=" << biased.bias;
+  EXPECT_NEAR(biased.bias, 0.05, 5 * biased.biasStdErr + 5 * result.refs[0].noise.meanRelStdErr);
+  EXPECT_EQ(biased.outlierRuns, 0);
+  const MethodVerdict& outlier = verdictOf(result, "pt-outlier");
+  EXPECT_EQ(outlier.outlierRuns, 2);  // run 1 at both budgets
+  EXPECT_FALSE(outlier.biased);
+  for (const RunRecord& r : result.runs) {
+    bool isOutlier = false;
+    for (const auto& f : r.flags) isOutlier |= f.rfind("outlier", 0) == 0;
+    EXPECT_EQ(isOutlier, r.method == "pt-outlier" && r.run == 1) << r.method << " run " << r.run;
+    if (r.method == "pssmlt") {
+      EXPECT_TRUE(r.markovChain);
+      EXPECT_GT(r.acceptance, 0);
+      EXPECT_LE(r.acceptance, 1);
+      EXPECT_GT(r.chains, 0);
+    } else {
+      EXPECT_FALSE(r.markovChain);
+      EXPECT_EQ(r.work, r.budget);  // equal samples: spp = budget
+    }
+  }
+  // The reference's own noise was estimated and is small next to the injected bias.
+  EXPECT_EQ(result.refs[0].noise.parts, 4);
+  EXPECT_GT(result.refs[0].noise.relMSEFloor, 0);
+  EXPECT_LT(result.refs[0].noise.meanRelStdErr, 0.01);
+
+  // Outputs: the tables read back, the summary names the failures, the error maps exist.
+  std::ifstream runsCsv(out + "/runs.csv");
+  auto back = readRunsCsv(runsCsv);
+  EXPECT_EQ(back.size(), result.runs.size());
+  std::ifstream acc(out + "/acceptance.csv");
+  std::string line;
+  int accRows = -1;
+  while (std::getline(acc, line)) ++accRows;
+  EXPECT_GT(accRows, 0);
+  std::ifstream summaryFile(out + "/summary.md");
+  std::stringstream summary;
+  summary << summaryFile.rdbuf();
+  EXPECT_NE(summary.str().find("**pt-biased** fails: biased"), std::string::npos) << summary.str();
+  EXPECT_NE(summary.str().find("**pt-outlier** fails: unstable"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(out + "/maps/furnace_pt_error.png"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/maps/furnace_reference.png"));
+}
+
+TEST(EvalEndToEnd, ChartScriptWritesCharts) {
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' 2>/dev/null") != 0)
+    GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not available";
+  const std::string out = tempDir("charts");
+  EvalConfig cfg = quickConfig(out);
+  cfg.runs = 3;
+  cfg.methods = {parseMethodSpec("pt"), parseMethodSpec("pssmlt")};
+  cfg.charts = true;
+  cfg.errorMaps = false;
+  runEval(cfg);
+  for (const char* f : {"error_time_furnace.png", "spread_furnace.png", "acceptance_furnace.png"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  std::ifstream summaryFile(out + "/summary.md");
+  std::stringstream summary;
+  summary << summaryFile.rdbuf();
+  EXPECT_NE(summary.str().find("](error_time_furnace.png)"), std::string::npos);
+}
+
+TEST(EvalEndToEnd, ReferenceIsCachedByContentAndSettings) {
+  spdlog::set_level(spdlog::level::warn);
+  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/furnace-sphere.xml");
+  desc.camera.width = desc.camera.height = 8;
+  auto scene = RenderScene::build(desc);
+  RenderSettings base;
+  base.width = base.height = 8;
+  ReferenceSettings rs;
+  rs.spp = 8;
+  rs.parts = 2;
+  const std::string dir = tempDir("refcache");
+  const std::string hash = sceneContentHash(desc);
+  Reference first = obtainReference(*scene, base, rs, "furnace", hash, dir, 1e-2, 1);
+  Reference second = obtainReference(*scene, base, rs, "furnace", hash, dir, 1e-2, 1);
+  EXPECT_FALSE(first.info.cached);
+  EXPECT_TRUE(second.info.cached);
+  ASSERT_EQ(first.image.size(), second.image.size());
+  for (size_t i = 0; i < first.image.size(); ++i) EXPECT_EQ(first.image[i].g, second.image[i].g);
+  EXPECT_NEAR(second.info.noise.relMSEFloor, first.info.noise.relMSEFloor, 1e-6 * first.info.noise.relMSEFloor);
+  // Other settings, other key.
+  ReferenceSettings more = rs;
+  more.spp = 16;
+  EXPECT_NE(referenceCacheKey(hash, base, rs), referenceCacheKey(hash, base, more));
+  EXPECT_FALSE(obtainReference(*scene, base, more, "furnace", hash, dir, 1e-2, 1).info.cached);
+}
+
+TEST(EvalEndToEnd, EqualTimeModeCalibratesWork) {
+  // Structure only (no assertion on speed): calibrated runs ask for positive work and record their time.
+  const std::string out = tempDir("time");
+  EvalConfig cfg = quickConfig(out);
+  cfg.equalSamples = false;
+  cfg.runs = 2;
+  cfg.budgets = {0.1, 0.3};
+  cfg.errorMaps = false;
+  cfg.methods = {parseMethodSpec("pt")};
+  EvalResult r = runEval(cfg);
+  ASSERT_EQ(r.runs.size(), 4u);
+  for (const RunRecord& run : r.runs) {
+    EXPECT_GE(run.work, 1);
+    EXPECT_GT(run.seconds, 0);
+    EXPECT_GT(run.samples, 0u);
+  }
 }
 
 }  // namespace

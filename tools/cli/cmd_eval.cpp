@@ -1,0 +1,195 @@
+// `mltfarm eval`: accuracy against speed. Scenes x methods x budgets x R runs, each run a complete job with
+// its own seed, compared with a reference; writes runs.csv, acceptance.csv, refs.csv, charts, error maps
+// and summary.md under --out (see tools/eval/harness.h). Example:
+//   mltfarm eval --scenes scenes/cornell-box.xml --methods pt,bdpt,pssmlt,mmlt --runs 4 --budgets 1,2,4 --out ev
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "common/scene/mitsuba_loader.h"
+#include "tools/cli/commands.h"
+#include "tools/eval/harness.h"
+
+namespace mlt::cli {
+namespace {
+
+struct EvalCliOptions {
+  std::vector<std::string> scenes, methods{"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}, defines;
+  std::vector<double> budgets{1, 2, 4, 8};
+  std::string out, reference, refMethod = "bdpt", injectOutlier, python = "/usr/bin/python3";
+  int runs = 3, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0, refSpp = 1024, refParts = 4;
+  int chains = 0, bootstrap = 100000;
+  float largeStep = 0.3f;
+  double eps = 1e-2, outlierRatio = 4, biasAlpha = 1e-3, minBias = 0.01;
+  uint64_t seed = 1;
+  bool equalSamples = false, farm = false, noCharts = false, noMaps = false, noCache = false, quiet = false;
+};
+
+std::vector<std::string> splitCommas(const std::vector<std::string>& items) {
+  std::vector<std::string> out;
+  for (const std::string& item : items) {
+    std::stringstream ss(item);
+    for (std::string s; std::getline(ss, s, ',');)
+      if (!s.empty()) out.push_back(s);
+  }
+  return out;
+}
+
+eval::OutlierInjection parseInjection(const std::string& s) {
+  // METHOD:RUN[:FACTOR]
+  eval::OutlierInjection inj;
+  std::stringstream ss(s);
+  std::string method, run, factor;
+  std::getline(ss, method, ':');
+  std::getline(ss, run, ':');
+  std::getline(ss, factor, ':');
+  try {
+    if (method.empty() || run.empty()) throw std::invalid_argument("");
+    inj.method = method;
+    inj.run = std::stoi(run);
+    if (!factor.empty()) inj.factor = std::stod(factor);
+  } catch (const std::exception&) {
+    throw std::invalid_argument("--inject-outlier '" + s + "': expected METHOD:RUN[:FACTOR]");
+  }
+  return inj;
+}
+
+CommandRun setupEval(CLI::App& sub) {
+  auto o = std::make_shared<EvalCliOptions>();
+  sub.add_option("--scenes", o->scenes, "Scene files, comma-separated")->required()->delimiter(',');
+  sub.add_option("--methods", o->methods,
+                 "Methods, comma-separated: pt, lt, bdpt, pssmlt, pssmlt-bdpt, mmlt. A spec LABEL=METHOD*SCALE "
+                 "multiplies every image of the method by SCALE (test hook: a deliberately biased method)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub.add_option("--runs", o->runs, "Independent runs (different job seeds) per scene x method x budget")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--budgets", o->budgets,
+                 "Budgets, comma-separated: seconds per run (equal time), or with --equal-samples spp "
+                 "(pt/lt/bdpt) and mutations per pixel (Markov chains)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub.add_flag("--equal-samples", o->equalSamples, "Budgets are samples (spp / mutations per pixel), not seconds");
+  sub.add_option("-o,--out", o->out, "Output directory")->required();
+  sub.add_option("--reference", o->reference, "Reference EXR (one scene only); default: render and cache one");
+  sub.add_option("--ref-method", o->refMethod, "Method of the rendered reference")->capture_default_str();
+  sub.add_option("--ref-spp", o->refSpp, "Samples per pixel of the rendered reference (over all parts)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--ref-parts", o->refParts, "Independent parts of the reference (its noise estimate)")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1024));
+  sub.add_flag("--no-ref-cache", o->noCache, "Always render the reference (do not read or write OUT/refs)");
+  sub.add_flag("--farm", o->farm, "Run every job through the farm (coordinator + worker processes)");
+  sub.add_option("--width", o->width, "Film width (default: the scene's)")->check(CLI::PositiveNumber);
+  sub.add_option("--height", o->height, "Film height (default: the scene's)")->check(CLI::PositiveNumber);
+  auto* maxDepth = sub.add_option("--max-depth", o->maxDepth, "Maximum path segments (default: the scene's, else 5)")
+                       ->check(CLI::Range(-1, 1 << 20));
+  auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's, else 5)")
+                      ->check(CLI::NonNegativeNumber);
+  sub.add_option("--chains", o->chains, "Markov chains per job (0 = automatic)")->check(CLI::NonNegativeNumber);
+  sub.add_option("--bootstrap", o->bootstrap, "Bootstrap samples (per path length for mmlt)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--large-step", o->largeStep, "Large-step probability")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--eps", o->eps, "relMSE epsilon: (x-r)^2 / (r^2 + eps)")->capture_default_str()->check(CLI::PositiveNumber);
+  sub.add_option("--seed", o->seed, "Base seed (run seeds derive from it)")->capture_default_str();
+  sub.add_option("-t,--threads", o->threads, "Threads per run (default: every core)")->check(CLI::NonNegativeNumber);
+  sub.add_option("--outlier-ratio", o->outlierRatio, "A run is an outlier above this x its group's median relMSE")
+      ->capture_default_str();
+  sub.add_option("--bias-alpha", o->biasAlpha, "Family-wise significance level of the bias test")->capture_default_str();
+  sub.add_option("--min-bias", o->minBias, "Smallest relative brightness error called bias")->capture_default_str();
+  sub.add_option("--inject-outlier", o->injectOutlier,
+                 "Test hook METHOD:RUN[:FACTOR]: amplify that run's error by FACTOR (default 10) at every budget");
+  sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
+  sub.add_option("--python", o->python, "Python with matplotlib for the charts")->capture_default_str();
+  sub.add_flag("--no-charts", o->noCharts, "Do not run the chart script");
+  sub.add_flag("--no-maps", o->noMaps, "Do not write error maps and images");
+  sub.add_flag("-q,--quiet", o->quiet, "No progress lines");
+
+  return [o, maxDepth, rrDepth]() -> int {
+    eval::EvalConfig cfg;
+    std::map<std::string, std::string> defines;
+    for (const std::string& d : o->defines) {
+      size_t eq = d.find('=');
+      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--define '" + d + "': expected name=value");
+      defines[d.substr(0, eq)] = d.substr(eq + 1);
+    }
+    for (const std::string& path : splitCommas(o->scenes)) {
+      eval::EvalScene es;
+      es.name = std::filesystem::path(path).stem().string();
+      for (const auto& other : cfg.scenes)
+        if (other.name == es.name) throw std::invalid_argument("--scenes: two scenes named '" + es.name + "'");
+      es.desc = loadMitsubaScene(path, defines);
+      cfg.scenes.push_back(std::move(es));
+    }
+    for (const std::string& m : splitCommas(o->methods)) cfg.methods.push_back(eval::parseMethodSpec(m));
+    cfg.budgets = o->budgets;
+    cfg.runs = o->runs;
+    cfg.equalSamples = o->equalSamples;
+    cfg.outDir = o->out;
+    cfg.userReference = o->reference;
+    cfg.reference.method = parseMethod(o->refMethod);
+    cfg.reference.spp = o->refSpp;
+    cfg.reference.parts = o->refParts;
+    cfg.cacheReferences = !o->noCache;
+    cfg.base.width = o->width;
+    cfg.base.height = o->height;
+    if ((o->width > 0) != (o->height > 0)) throw std::invalid_argument("--width and --height go together");
+    cfg.depthFromScene = !(maxDepth->count() || rrDepth->count());
+    if (maxDepth->count()) cfg.base.integrator.maxDepth = o->maxDepth;
+    if (rrDepth->count()) cfg.base.integrator.rrDepth = o->rrDepth;
+    cfg.base.chains = o->chains;
+    cfg.base.bootstrapSamples = o->bootstrap;
+    cfg.base.largeStepProb = o->largeStep;
+    cfg.eps = o->eps;
+    cfg.seed = o->seed;
+    cfg.threads = o->threads;
+    cfg.stability.outlierRatio = o->outlierRatio;
+    cfg.stability.biasAlpha = o->biasAlpha;
+    cfg.stability.minBias = o->minBias;
+    if (!o->injectOutlier.empty()) cfg.injectOutlier = parseInjection(o->injectOutlier);
+    cfg.python = o->python;
+    cfg.charts = !o->noCharts;
+    cfg.errorMaps = !o->noMaps;
+    cfg.verbose = !o->quiet;
+    {
+      auto join = [](const std::vector<std::string>& v) {
+        std::string s;
+        for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+        return s;
+      };
+      std::string budgets;
+      for (double b : o->budgets) budgets += (budgets.empty() ? "" : ",") + fmt::format("{:g}", b);
+      cfg.commandLine = fmt::format("mltfarm eval --scenes {} --methods {} --runs {} --budgets {}{}{} --out {}",
+                                    join(splitCommas(o->scenes)), join(splitCommas(o->methods)), o->runs, budgets,
+                                    o->equalSamples ? " --equal-samples" : "",
+                                    o->width > 0 ? fmt::format(" --width {} --height {}", o->width, o->height) : "",
+                                    o->out);
+    }
+    if (o->farm) throw std::runtime_error("--farm: the embedded farm is not available in this build yet");
+
+    eval::EvalResult result = eval::runEval(cfg);
+    int failing = 0;
+    for (const auto& v : result.stability.verdicts) {
+      if (v.ok()) continue;
+      ++failing;
+      std::fprintf(stderr, "%s / %s:", v.scene.c_str(), v.method.c_str());
+      for (const auto& p : v.problems) std::fprintf(stderr, " %s.", p.c_str());
+      std::fprintf(stderr, "\n");
+    }
+    std::printf("eval: %zu runs, %d scene/method pairs with problems; see %s/summary.md\n", result.runs.size(),
+                failing, cfg.outDir.c_str());
+    return 0;
+  };
+}
+
+const CommandRegistration kEval("eval", "Accuracy against speed: error vs time charts, stability, summary", setupEval);
+
+}  // namespace
+}  // namespace mlt::cli
