@@ -74,8 +74,9 @@ std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, Method me
     case Method::BDPT: return std::make_unique<BdptEvaluator>(scene, settings);
     default: break;
   }
-  throw std::invalid_argument(std::string("makeEvaluator: method '") + methodName(method) +
-                              "' is a Markov chain method, not a sample-based path evaluator");
+  // (methodName lives in the job library, which links after this one: no call to it here.)
+  throw std::invalid_argument("makeEvaluator: method #" + std::to_string(static_cast<int>(method)) +
+                              " is a Markov chain method, not a sample-based path evaluator (pt, lt, bdpt)");
 }
 
 }  // namespace mlt
