@@ -10,13 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 
 #include "common/io/png_io.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
+#include "common/scene/scene_hash.h"
 #include "tools/cli/progress.h"
 
 namespace mlt::cli {
@@ -28,15 +28,6 @@ using Clock = std::chrono::steady_clock;
 // Without --spp, a time-limited pt/lt/bdpt render plans this many samples per pixel in units of one
 // sample each and stops when the time is up.
 constexpr int kTimeOnlySppCap = 1 << 16;
-
-uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
 
 // Restricts a Markov-chain plan to the chains that ran (a prefix in index order) and sets the
 // normalization's mutation totals to what they ran: chains are independent, so the estimate over the
@@ -61,30 +52,6 @@ std::string pngPathFor(const std::string& exrPath) {
   return p.string();
 }
 
-std::string sceneContentHash(const std::string& sceneFile, const std::vector<std::string>& referencedFiles) {
-  // FNV-1a 64 over (name length, name, size, bytes) of each file, scene file first. Names are the file
-  // names relative to the scene file's directory, so the hash does not depend on where the scene lives.
-  uint64_t h = 0xcbf29ce484222325ULL;
-  const std::filesystem::path base = std::filesystem::path(sceneFile).parent_path();
-  std::vector<std::string> files{sceneFile};
-  files.insert(files.end(), referencedFiles.begin(), referencedFiles.end());
-  for (const std::string& f : files) {
-    const std::string rel = std::filesystem::path(f).lexically_relative(base).generic_string();
-    const uint64_t len = rel.size();
-    h = fnv1a(h, &len, sizeof len);
-    h = fnv1a(h, rel.data(), rel.size());
-    std::ifstream in(f, std::ios::binary);
-    if (!in) throw std::runtime_error(f + ": cannot read (for the scene hash)");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const uint64_t size = bytes.size();
-    h = fnv1a(h, &size, sizeof size);
-    h = fnv1a(h, bytes.data(), bytes.size());
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)h);
-  return buf;
-}
-
 LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   // ---- Scene ----------------------------------------------------------------------------------------
   SceneDesc desc = loadMitsubaScene(options.scenePath, options.defines);
@@ -104,7 +71,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     if (settings.samplesPerUnit == 0) settings.samplesPerUnit = 1;
   }
   LocalRenderResult result;
-  result.sceneHash = sceneContentHash(options.scenePath, desc.referencedFiles);
+  result.sceneHash = sceneContentHash(desc);  // SHA-256 over the scene file and every file it reads
   const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
 
   // ---- Plan and run ---------------------------------------------------------------------------------

@@ -37,9 +37,6 @@ struct LocalRenderResult {
 
 LocalRenderResult renderLocal(const LocalRenderOptions& options);
 
-// The content hash of a scene: the scene file and every file it references.
-std::string sceneContentHash(const std::string& sceneFile, const std::vector<std::string>& referencedFiles);
-
 // "out.exr" -> "out.png" (any extension replaced; none added if missing).
 std::string pngPathFor(const std::string& exrPath);
 
