@@ -27,7 +27,8 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     y->clear();
     target.evaluate(*y);
     const double cy = targetFunction(*y);
-    const double ratio = p.tRatio * cy / cx;
+    double ratio = p.tRatio * cy / cx;
+    if (config.acceptancePower != 1) ratio = std::pow(ratio, config.acceptancePower);
     const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);
     const int type = static_cast<int>(p.type);
     ++counts.proposed[type];

@@ -66,6 +66,9 @@ struct ChainConfig {
   ChainSplatting splatting = ChainSplatting::ExpectedValue;
   double largeStepProb = 0;  // p_large, for KelemenMIS weights
   double b = 0;              // normalization (KelemenMIS only; must be > 0 there)
+  // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
+  // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
+  double acceptancePower = 1;
 };
 
 struct ChainCounts {

@@ -16,7 +16,7 @@ namespace {
 // sign, log-uniform magnitude in [s1, s2]). The density of the sum of n offsets mod 1 deviates from
 // uniform by at most 2 sum_f |phi_f|^n; beyond this n, drawing a uniform is exact to float precision and
 // saves applying thousands of pending steps to a coordinate that was unread for a long time.
-int64_t exponentialUniformAfter(float s1, float s2) {
+int64_t computeExponentialUniformAfter(float s1, float s2) {
   const double l0 = std::log(double(s1)), l1 = std::log(double(s2));
   double worst = 0;
   for (int f = 1; f <= 16; ++f) {
@@ -27,6 +27,18 @@ int64_t exponentialUniformAfter(float s1, float s2) {
   }
   if (worst >= 1) return INT64_MAX;
   return static_cast<int64_t>(std::ceil(-30 * std::log(2.0) / std::log(worst)));
+}
+
+// Cached per thread (a chain constructs one source; computing this costs ~65k transcendentals).
+int64_t exponentialUniformAfter(float s1, float s2) {
+  thread_local float lastS1 = -1, lastS2 = -1;
+  thread_local int64_t last = 0;
+  if (s1 != lastS1 || s2 != lastS2) {
+    last = computeExponentialUniformAfter(s1, s2);
+    lastS1 = s1;
+    lastS2 = s2;
+  }
+  return last;
 }
 
 inline float wrap01(double v) {

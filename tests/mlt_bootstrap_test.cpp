@@ -1,0 +1,141 @@
+// Bootstrap pieces: the alias table samples its weights (chi-square), apportionment is exact and
+// proportional, the bootstrap is bit-identical for any thread count, and develop's quantization makes
+// merging exact.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "common/mlt/alias_table.h"
+#include "common/mlt/bootstrap.h"
+#include "common/mlt/develop.h"
+#include "common/sampler/sample_source.h"
+#include "tests/support/chi2.h"
+
+namespace mlt {
+namespace {
+
+TEST(AliasTable, SamplesItsWeights) {
+  Pcg32 rng(3, 4);
+  std::vector<double> w(200);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = i % 7 == 0 ? 0.0 : std::pow(rng.uniformDouble(), 3);
+  const AliasTable table(w);
+  const int n = 1000000;
+  std::vector<double> count(w.size(), 0);
+  for (int i = 0; i < n; ++i) count[table.sample(rng.uniformDouble())] += 1;
+  double stat = 0;
+  int dof = -1;
+  for (size_t i = 0; i < w.size(); ++i) {
+    const double e = n * table.pmf(i);
+    if (w[i] == 0) {
+      EXPECT_EQ(count[i], 0) << "zero-weight index " << i << " sampled";
+      continue;
+    }
+    stat += (count[i] - e) * (count[i] - e) / e;
+    ++dof;
+  }
+  EXPECT_GT(test::chi2SurvivalProbability(stat, dof), 0.01);
+}
+
+TEST(AliasTable, RejectsBadWeights) {
+  EXPECT_THROW(AliasTable(std::vector<double>{}), std::invalid_argument);
+  EXPECT_THROW(AliasTable(std::vector<double>{0, 0}), std::invalid_argument);
+  EXPECT_THROW(AliasTable(std::vector<double>{1, -1}), std::invalid_argument);
+  EXPECT_THROW(AliasTable(std::vector<double>{1, NAN}), std::invalid_argument);
+}
+
+TEST(Apportion, ExactAndProportional) {
+  Pcg32 rng(9, 9);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<double> w(1 + rng.bounded(8));
+    for (double& x : w) x = rng.uniform() < 0.2f ? 0.0 : rng.uniformDouble();
+    const uint64_t total = rng.bounded(100000);
+    const std::vector<uint64_t> share = apportion(total, w);
+    double sum = 0;
+    for (double x : w) sum += x;
+    uint64_t given = 0;
+    for (size_t i = 0; i < w.size(); ++i) {
+      given += share[i];
+      if (sum > 0) {
+        EXPECT_LT(std::fabs(double(share[i]) - total * w[i] / sum), 1.0) << trial;
+      }
+      if (w[i] == 0) {
+        EXPECT_EQ(share[i], 0u);
+      }
+    }
+    if (sum > 0) EXPECT_EQ(given, total);
+  }
+  EXPECT_EQ(apportion(10, {1, 1, 1}), (std::vector<uint64_t>{4, 3, 3}));  // ties to the lower index
+}
+
+BootstrapResult runWithThreads(int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 50000;
+  bc.pathLengths = {2, 3, 4};
+  return runBootstrap(bc, [] {
+    return [](uint64_t i, int k) {
+      const IndependentSource s(11, i);
+      const double x = s.valueAt(0, 0), y = s.valueAt(1, 3);
+      return x < 0.3 ? 0.0 : std::exp(k * x * y);  // some zeros, a per-length scale
+    };
+  });
+}
+
+TEST(Bootstrap, BitIdenticalForAnyThreadCount) {
+  const BootstrapResult a = runWithThreads(1), b = runWithThreads(2), c = runWithThreads(8);
+  for (const BootstrapResult* r : {&b, &c}) {
+    ASSERT_EQ(r->lengths.size(), a.lengths.size());
+    EXPECT_EQ(std::memcmp(&r->b, &a.b, sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&r->bStdErr, &a.bStdErr, sizeof(double)), 0);
+    for (size_t l = 0; l < a.lengths.size(); ++l) {
+      EXPECT_EQ(r->lengths[l].c, a.lengths[l].c);
+      EXPECT_EQ(std::memcmp(&r->lengths[l].b, &a.lengths[l].b, sizeof(double)), 0);
+      for (int j = 0; j < 1000; ++j)
+        EXPECT_EQ(r->lengths[l].table.sample(j / 1000.0), a.lengths[l].table.sample(j / 1000.0));
+    }
+  }
+  // Candidates of different lengths are distinct numbers: slot l owns [l N, (l+1) N).
+  EXPECT_EQ(a.lengths[1].firstCandidate, 50000u);
+}
+
+TEST(Develop, QuantizedFilmsMergeExactlyInAnyGrouping) {
+  std::vector<Film> films;
+  Pcg32 rng(1, 1);
+  for (int u = 0; u < 7; ++u) {
+    Film f(8, 4);
+    for (int i = 0; i < 300; ++i)
+      f.addSplat(Vec2(rng.uniform() * 8, rng.uniform() * 4), Color(rng.uniform() * 3, rng.uniform(), rng.uniform() * 1e-7f));
+    quantizeFilm(f, 5, u);
+    films.push_back(f);
+  }
+  Film seq = films[0];
+  for (int u = 1; u < 7; ++u) seq.merge(films[u]);
+  Film left = films[0], right = films[4];
+  for (int u = 1; u < 4; ++u) left.merge(films[u]);
+  for (int u = 5; u < 7; ++u) right.merge(films[u]);
+  left.merge(right);
+  ASSERT_EQ(seq.splatSums().size(), left.splatSums().size());
+  EXPECT_EQ(std::memcmp(seq.splatSums().data(), left.splatSums().data(), seq.splatSums().size() * sizeof(RGBd)), 0);
+}
+
+TEST(Develop, QuantizationIsUnbiased) {
+  // A value far below the quantum survives in expectation (stochastic rounding).
+  const double v = 0.3 * std::ldexp(1.0, -kQuantumExp);
+  double sum = 0;
+  const int n = 20000;
+  for (int u = 0; u < n; ++u) {
+    Film f(1, 1);
+    f.splatSums()[0].r = v;
+    quantizeFilm(f, 9, u);
+    sum += f.splatSums()[0].r;
+  }
+  const double q = std::ldexp(1.0, -kQuantumExp);
+  const double se = q * std::sqrt(0.3 * 0.7 / n);
+  EXPECT_NEAR(sum / n, v, 4 * se);
+}
+
+}  // namespace
+}  // namespace mlt
