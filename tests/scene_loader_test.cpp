@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/core/rng.h"
 #include "common/core/sha256.h"
 #include "common/scene/mesh_readers.h"
 #include "common/scene/mitsuba_loader.h"
@@ -789,6 +790,36 @@ TEST(MitsubaLoaderErrors, UnsupportedFeatures) {
   expectError(d, sceneXml("  <bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\n"
                           "    <string name=\"filename\" value=\"t.exr\"/></texture></bsdf>\n"),
               3, "PNG");
+}
+
+// Truncated and corrupted scene files give a SceneError (or load), never another exception or a crash.
+TEST(MitsubaLoaderErrors, TruncatedAndCorruptedFilesOnlyThrowSceneError) {
+  TempDir d;
+  std::ifstream in(kScenes + "/door-ajar.xml");
+  const std::string full((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(full.size(), 1000u);
+  Pcg32 rng(7, 11);
+  int errors = 0, trials = 0;
+  auto attempt = [&](const std::string& text) {
+    ++trials;
+    try {
+      loadMitsubaScene(d.write("scene.xml", text));
+    } catch (const SceneError& e) {
+      ++errors;
+      EXPECT_NE(std::string(e.what()).find("scene.xml"), std::string::npos) << e.what();
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "not a SceneError: " << e.what();
+    }
+  };
+  for (size_t n = 0; n < full.size(); n += 97) attempt(full.substr(0, n));
+  const std::string junk = "<>\"'&$=/ x9.-";
+  for (int i = 0; i < 60; ++i) {
+    std::string t = full;
+    for (int k = 0; k < 3; ++k) t[rng.bounded(uint32_t(t.size()))] = junk[rng.bounded(uint32_t(junk.size()))];
+    attempt(t);
+  }
+  EXPECT_GT(errors, trials / 2);
+  attempt("<scene version=\"3.0.0\">" + [] { std::string s; for (int i = 0; i < 2000; ++i) s += "<a>"; return s; }());
 }
 
 // ------------------------------------------------------------------------------------------------------

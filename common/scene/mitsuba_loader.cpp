@@ -312,7 +312,7 @@ void Loader::parseSensor(const XmlElement& el) {
       collect(*n, sp, sn);
       if (!sn.empty()) failAt(*sn.front(), "unexpected element inside <sampler>");
       if (auto spp = sp.optInt("sample_count")) {
-        if (*spp <= 0) failAt(*n, "sample_count must be positive");
+        if (*spp <= 0 || *spp > (1 << 30)) failAt(*n, "sample_count must be in [1, 2^30]");
         scene_.sampleCount = int(*spp);
       }
       sp.ignore({"seed", "scramble", "dimension", "jitter", "strength", "resolution", "depth"});
@@ -334,11 +334,11 @@ void Loader::parseIntegrator(const XmlElement& el) {
   std::vector<const XmlElement*> nested;
   collect(el, props, nested);
   if (auto d = props.optInt("max_depth")) {
-    if (*d < -1) failAt(el, "max_depth must be -1 (unlimited) or >= 0");
+    if (*d < -1 || *d > (1 << 20)) failAt(el, "max_depth must be -1 (unlimited) or in [0, 2^20]");
     scene_.maxDepth = int(*d);
   }
   if (auto d = props.optInt("rr_depth")) {
-    if (*d < 0) failAt(el, "rr_depth must be >= 0");
+    if (*d < 0 || *d > (1 << 20)) failAt(el, "rr_depth must be in [0, 2^20]");
     scene_.rrDepth = int(*d);
   }
   if (props.getBool("hide_emitters", false)) warn(el, "hide_emitters is ignored (emitters stay visible)");

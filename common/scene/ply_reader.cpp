@@ -166,6 +166,7 @@ MeshDesc readPly(const std::string& path) {
       long long count = -1;
       ls >> e.name >> count;
       if (e.name.empty() || count < 0 || ls.fail()) throw SceneError(path, line, "malformed PLY element line '" + l + "'");
+      if (size_t(count) > data.size()) throw SceneError(path, line, "PLY element count " + std::to_string(count) + " exceeds the file size");
       e.count = size_t(count);
       elements.push_back(e);
     } else if (kw == "property") {

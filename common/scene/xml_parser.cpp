@@ -177,6 +177,7 @@ class Parser {
   }
 
   XmlElement parseElement() {
+    if (++depth_ > kMaxDepth) fail("elements nested more than " + std::to_string(kMaxDepth) + " deep");
     XmlElement el;
     el.file = file_;
     el.line = line_;
@@ -189,6 +190,7 @@ class Parser {
       if (pos_ >= s_.size()) failAt(el.line, "unterminated start tag <" + el.name);
       if (startsWith("/>")) {
         advance(2);
+        --depth_;
         return el;
       }
       if (s_[pos_] == '>') {
@@ -258,6 +260,7 @@ class Parser {
       }
     }
     el.text = trim(text);
+    --depth_;
     return el;
   }
 
@@ -265,6 +268,8 @@ class Parser {
   std::string file_;
   size_t pos_ = 0;
   int line_ = 1;
+  int depth_ = 0;
+  static constexpr int kMaxDepth = 256;
 };
 
 }  // namespace
