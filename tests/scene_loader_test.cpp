@@ -624,6 +624,96 @@ TEST(MitsubaLoader, NamedRefsToBsdfs) {
   EXPECT_TRUE(s.warnings.size() == 1u);  // only: no sensor
 }
 
+// The shape of the 0.5/0.6 scenes in Bitterli's rendering resources (exported from Tungsten).
+TEST(MitsubaLoader, BitterliStyle06Scene) {
+  TempDir d;
+  fs::create_directories(d.path() / "models");
+  fs::copy_file(kData + "/quad.obj", d.path() / "models/Mesh001.obj", fs::copy_options::overwrite_existing);
+  const SceneDesc s = loadBody(d, R"(
+	<integrator type="path">
+		<integer name="maxDepth" value="65"/>
+		<boolean name="strictNormals" value="true"/>
+	</integrator>
+	<sensor type="perspective">
+		<float name="farClip" value="100"/>
+		<float name="focusDistance" value="6.8"/>
+		<float name="fov" value="19.5"/>
+		<string name="fovAxis" value="x"/>
+		<float name="nearClip" value="0.1"/>
+		<transform name="toWorld">
+			<lookat target="0, 1, 5.8" origin="0, 1, 6.8" up="0, 1, 0"/>
+		</transform>
+		<sampler type="independent">
+			<integer name="sampleCount" value="64"/>
+		</sampler>
+		<film type="ldrfilm">
+			<integer name="width" value="1024"/>
+			<integer name="height" value="1024"/>
+			<string name="fileFormat" value="png"/>
+			<string name="pixelFormat" value="rgb"/>
+			<float name="gamma" value="2.2"/>
+			<boolean name="banner" value="false"/>
+			<rfilter type="tent"/>
+		</film>
+	</sensor>
+	<bsdf type="twosided" id="LeftWall">
+		<bsdf type="diffuse">
+			<rgb name="reflectance" value="0.63, 0.065, 0.05"/>
+		</bsdf>
+	</bsdf>
+	<bsdf type="twosided" id="Light">
+		<bsdf type="diffuse">
+			<rgb name="reflectance" value="0, 0, 0"/>
+		</bsdf>
+	</bsdf>
+	<shape type="obj">
+		<string name="filename" value="models/Mesh001.obj"/>
+		<transform name="toWorld">
+			<matrix value="-4.37114e-008 1 4.37114e-008 0 0 -8.74228e-008 2 0 4 4.37114e-008 1.91069e-015 0 0 0 0 1"/>
+		</transform>
+		<boolean name="faceNormals" value="true"/>
+		<ref id="LeftWall"/>
+	</shape>
+	<shape type="rectangle">
+		<transform name="toWorld">
+			<matrix value="0.235 0 0 -0.005 0 -1.73 -0.19 1.98 0 0.19 -1.7 -0.03 0 0 0 1"/>
+		</transform>
+		<ref id="Light"/>
+		<emitter type="area">
+			<rgb name="radiance" value="17, 12, 4"/>
+		</emitter>
+	</shape>
+)",
+                               "0.5.0");
+  EXPECT_EQ(s.maxDepth, 65);
+  EXPECT_EQ(s.camera.width, 1024);
+  EXPECT_EQ(s.sampleCount, 64);
+  EXPECT_EQ(s.warnings.size(), 2u);  // ldrfilm read as hdrfilm; tent -> box
+  ASSERT_EQ(s.meshes.size(), 2u);
+  EXPECT_TRUE(s.meshes[0].normals.empty());
+  EXPECT_EQ(s.bsdfs.at(s.meshes[0].bsdf).type, BsdfDesc::Type::TwoSided);
+  EXPECT_TRUE(s.meshes[1].emission.has_value());
+}
+
+TEST(MitsubaLoader, ColourForms) {
+  TempDir d;
+  const SceneDesc s = loadBody(d, R"(
+  <bsdf type="diffuse" id="a"><rgb name="reflectance" value="0.5 0.25 0.125"/></bsdf>
+  <bsdf type="diffuse" id="b"><srgb name="reflectance" value="#ff8000"/></bsdf>
+  <bsdf type="diffuse" id="c"><spectrum name="reflectance" value="0.7"/></bsdf>
+  <bsdf type="diffuse" id="e"><float name="reflectance" value="0.2"/></bsdf>
+)");
+  ASSERT_EQ(s.bsdfs.size(), 4u);
+  expectColor(s.bsdfs[0].reflectance.value, {0.5f, 0.25f, 0.125f});
+  // sRGB decoding: 0x80 = 128/255 -> ((0.502 + 0.055) / 1.055)^2.4 = 0.2159.
+  expectColor(s.bsdfs[1].reflectance.value, {1.0f, 0.21586f, 0.0f}, 1e-4f);
+  expectColor(s.bsdfs[2].reflectance.value, Color(0.7f));
+  expectColor(s.bsdfs[3].reflectance.value, Color(0.2f));
+  expectError(d, sceneXml("  <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5, 0.5\"/></bsdf>\n"), 2, "1 or 3 numbers");
+  expectError(d, sceneXml("  <sensor type=\"thinlens\"><float name=\"fov\" value=\"30\"/></sensor>\n"), 2, "aperture_radius");
+  expectError(d, sceneXml("  <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"-0.5\"/></bsdf>\n"), 2, "non-negative");
+}
+
 // ------------------------------------------------------------------------------------------------------
 // Emitters
 // ------------------------------------------------------------------------------------------------------
