@@ -2,14 +2,19 @@
 // its own seed, compared with a reference; writes runs.csv, acceptance.csv, refs.csv, charts, error maps
 // and summary.md under --out (see tools/eval/harness.h). Example:
 //   mltfarm eval --scenes scenes/cornell-box.xml --methods pt,bdpt,pssmlt,mmlt --runs 4 --budgets 1,2,4 --out ev
+#include <chrono>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
+#include "common/io/exr_io.h"
 #include "common/scene/mitsuba_loader.h"
 #include "tools/cli/commands.h"
 #include "tools/eval/harness.h"
@@ -37,6 +42,56 @@ std::vector<std::string> splitCommas(const std::vector<std::string>& items) {
       if (!s.empty()) out.push_back(s);
   }
   return out;
+}
+
+std::string shellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// --farm: every run is `mltfarm render SCENE --farm ...` in a child process (the command users run: it
+// starts a coordinator and local worker processes, submits, merges, develops), timed from the outside;
+// the image and the work done are read back from the EXR it writes. Chain acceptance statistics do not
+// travel through the EXR, so farm runs of Markov chain methods have no acceptance figures.
+eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& defines, int threads,
+                                const std::string& workDir) {
+  std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  return [=](const eval::EvalScene& scene, const RenderSettings& s) {
+    std::filesystem::create_directories(workDir);
+    const std::string exr = workDir + "/farm-run.exr", log = workDir + "/farm-run.log";
+    std::string cmd = fmt::format(
+        "{} render {} -o {} --farm -q -m {} --seed {} --width {} --height {} --max-depth {} --rr-depth {}",
+        shellQuote(self), shellQuote(std::filesystem::absolute(scene.desc.sourceFile).string()), shellQuote(exr), methodName(s.method), s.seed, s.width,
+        s.height, s.integrator.maxDepth, s.integrator.rrDepth);
+    if (isMarkovChainMethod(s.method))
+      cmd += fmt::format(" --mutations-per-pixel {:.17g} --bootstrap {} --large-step {} --chains {}", s.mutationsPerPixel,
+                         s.bootstrapSamples, s.largeStepProb, s.chains);
+    else
+      cmd += fmt::format(" --spp {}", s.spp);
+    if (threads > 0) cmd += fmt::format(" --threads {}", threads);
+    for (const auto& [k, v] : defines) cmd += " -D " + shellQuote(k + "=" + v);
+    cmd += " > " + shellQuote(log) + " 2>&1";
+    const auto start = std::chrono::steady_clock::now();
+    const int rc = std::system(cmd.c_str());
+    eval::FarmRunResult r;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (rc != 0) {
+      std::ifstream in(log);
+      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (text.size() > 2000) text = text.substr(text.size() - 2000);
+      throw std::runtime_error("--farm: `" + cmd + "` failed:\n" + text);
+    }
+    ExrImage img = readExr(exr);
+    r.image = std::move(img.rgb);
+    auto num = [&](const char* key) {
+      auto it = img.metadata.numbers.find(key);
+      return it == img.metadata.numbers.end() ? 0.0 : it->second;
+    };
+    r.samples = uint64_t(isMarkovChainMethod(s.method) ? num("mutations") : num("samples"));
+    r.units = int(isMarkovChainMethod(s.method) ? num("chains") : num("workUnits"));
+    return r;
+  };
 }
 
 eval::OutlierInjection parseInjection(const std::string& s) {
@@ -172,7 +227,8 @@ CommandRun setupEval(CLI::App& sub) {
                                     o->width > 0 ? fmt::format(" --width {} --height {}", o->width, o->height) : "",
                                     o->out);
     }
-    if (o->farm) throw std::runtime_error("--farm: the embedded farm is not available in this build yet");
+    if (o->farm) cfg.farm = makeFarmRunner(defines, o->threads, o->out + "/farm-tmp");
+    if (o->quiet) spdlog::set_level(spdlog::level::warn);
 
     eval::EvalResult result = eval::runEval(cfg);
     int failing = 0;
