@@ -42,7 +42,6 @@ CommandRun setupRender(CLI::App& sub) {
       ->capture_default_str()
       ->check(CLI::IsMember({"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}));
   auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel for pt, lt (light paths = spp * pixels) and bdpt (default: the scene's sampler sample_count, else 16)")
-                  ->capture_default_str()
                   ->check(CLI::PositiveNumber);
   sub.add_option("--samples-per-unit", o->samplesPerUnit,
                  "pt/lt/bdpt: samples per pixel in one work unit (0 = spp / 16, rounded up)")
@@ -61,8 +60,9 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("--time", o->time,
                  "Time budget in seconds. pt/lt/bdpt: run work units (in index order) until the time is up "
                  "and develop with the samples actually taken (without --spp: up to 65536 spp, one sample "
-                 "per unit). Markov chains: chains that have not started when the time is up are dropped and "
-                 "the image is normalized by the mutations that ran. A unit in progress always finishes.")
+                 "per unit). Markov chains: chains not started when the time is up are dropped and the image "
+                 "is normalized by the mutations that ran (exact for pssmlt; for mmlt the per-length "
+                 "weights assume the planned allocation). A unit in progress always finishes.")
       ->check(CLI::NonNegativeNumber);
   auto* maxDepth = sub.add_option("--max-depth", o->maxDepth,
                                   "Maximum path length in segments (edges): 1 = directly visible emitters "

@@ -29,21 +29,6 @@ using Clock = std::chrono::steady_clock;
 // sample each and stops when the time is up.
 constexpr int kTimeOnlySppCap = 1 << 16;
 
-// Restricts a Markov-chain plan to the chains that ran (a prefix in index order) and sets the
-// normalization's mutation totals to what they ran: chains are independent, so the estimate over the
-// chains that ran is the same estimator with a smaller M.
-void restrictToDoneUnits(JobPlan& plan, size_t done) {
-  plan.units.resize(done);
-  uint64_t total = 0;
-  std::vector<uint64_t> perLength(plan.norm.mutationsPerLength.size(), 0);
-  for (const WorkUnit& u : plan.units) {
-    total += u.mutations;
-    if (u.pathLength >= 0 && size_t(u.pathLength) < perLength.size()) perLength[u.pathLength] += u.mutations;
-  }
-  plan.norm.totalMutations = total;
-  if (!perLength.empty()) plan.norm.mutationsPerLength = perLength;
-}
-
 }  // namespace
 
 std::string pngPathFor(const std::string& exrPath) {
@@ -112,7 +97,9 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
                                                                    if (progress) progress->update(merged);
                                                                  }));
   if (merged == 0) throw std::runtime_error("no work unit finished within the time budget");
-  if (merged < nUnits && isMarkovChainMethod(plan.settings.method)) restrictToDoneUnits(plan, merged);
+  // A time budget ran out: pt/lt/bdpt develop with the samples the merged result holds (sample_job.cpp).
+  // Markov chains keep the full plan; developImage sees fewer mutations than planned and normalizes by
+  // the mutations merged (a chain subset of a stationary chain set; see mlt_job.cpp).
   if (merged < nUnits && !isMarkovChainMethod(plan.settings.method)) plan.units.resize(merged);
   result.image = developImage(plan, result.merged);
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();

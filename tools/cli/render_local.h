@@ -27,7 +27,7 @@ struct LocalRenderOptions {
 };
 
 struct LocalRenderResult {
-  JobPlan plan;                // the plan actually developed (time budget: only the units that ran)
+  JobPlan plan;                // the plan developed (time budget, pt/lt/bdpt: only the units that ran)
   PartialResult merged;
   std::vector<Color> image;    // developed linear RGB
   ImageMetadata metadata;
