@@ -1,0 +1,118 @@
+// Scene bundles (see bundle.h).
+#include "coordinator/bundle.h"
+
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+
+#include "common/scene/mitsuba_loader.h"
+
+namespace fs = std::filesystem;
+
+namespace mlt::farm {
+namespace {
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw FarmError(FarmError::Code::InvalidArgument, fmt::format("{}: cannot read file", p.string()));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+void validateBundlePath(const std::string& path) {
+  auto bad = [&](const char* why) {
+    throw FarmError(FarmError::Code::InvalidArgument, fmt::format("bundle path '{}': {}", path, why));
+  };
+  if (path.empty()) bad("empty");
+  if (path.front() == '/') bad("absolute paths are not allowed");
+  if (path.find('\\') != std::string::npos) bad("backslashes are not allowed");
+  size_t start = 0;
+  while (start <= path.size()) {
+    size_t end = path.find('/', start);
+    if (end == std::string::npos) end = path.size();
+    std::string part = path.substr(start, end - start);
+    if (part.empty() || part == "." || part == "..") bad("empty, '.' or '..' component");
+    start = end + 1;
+  }
+}
+
+SceneBundle collectBundle(const std::string& sceneFile) {
+  SceneDesc desc;
+  try {
+    desc = loadMitsubaScene(sceneFile);
+  } catch (const std::exception& e) {
+    throw FarmError(FarmError::Code::InvalidArgument, e.what());
+  }
+  const fs::path scenePath = fs::absolute(sceneFile).lexically_normal();
+  const fs::path root = scenePath.parent_path();
+  std::vector<std::string> paths{scenePath.string()};
+  for (const std::string& f : desc.referencedFiles) paths.push_back(fs::absolute(f).lexically_normal().string());
+  SceneBundle bundle;
+  bundle.sceneFile = scenePath.filename().string();
+  for (const std::string& p : paths) {
+    fs::path rel = fs::path(p).lexically_relative(root);
+    std::string r = rel.generic_string();
+    if (rel.empty() || r.rfind("..", 0) == 0)
+      throw FarmError(FarmError::Code::InvalidArgument,
+                      fmt::format("{}: referenced file {} lies outside the scene's directory {}; "
+                                  "submit with a coordinator-readable path instead",
+                                  sceneFile, p, root.string()));
+    if (std::any_of(bundle.files.begin(), bundle.files.end(), [&](const BundleFile& f) { return f.path == r; }))
+      continue;
+    bundle.files.push_back({r, readFile(p)});
+  }
+  std::sort(bundle.files.begin(), bundle.files.end(), [](auto& a, auto& b) { return a.path < b.path; });
+  return bundle;
+}
+
+std::string bundleHash(const std::vector<BundleFile>& files) {
+  std::vector<const BundleFile*> sorted;
+  for (const auto& f : files) sorted.push_back(&f);
+  std::sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->path < b->path; });
+  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
+  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  for (const BundleFile* f : sorted) {
+    // Same scheme as common/scene/scene_hash.h: path, '\0', 8-byte big-endian size, bytes.
+    std::string head = f->path + '\0';
+    for (int b = 7; b >= 0; --b) head += char((uint64_t(f->data.size()) >> (8 * b)) & 0xff);
+    EVP_DigestUpdate(ctx, head.data(), head.size());
+    EVP_DigestUpdate(ctx, f->data.data(), f->data.size());
+  }
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_DigestFinal_ex(ctx, digest, &len);
+  EVP_MD_CTX_free(ctx);
+  std::string hex;
+  for (unsigned i = 0; i < len; ++i) hex += fmt::format("{:02x}", digest[i]);
+  return hex;
+}
+
+void writeBundle(const std::string& dir, const std::vector<BundleFile>& files) {
+  for (const BundleFile& f : files) {
+    validateBundlePath(f.path);
+    fs::path p = fs::path(dir) / f.path;
+    fs::create_directories(p.parent_path());
+    std::ofstream out(p, std::ios::binary | std::ios::trunc);
+    out.write(f.data.data(), std::streamsize(f.data.size()));
+    if (!out) throw FarmError(FarmError::Code::Internal, fmt::format("{}: cannot write", p.string()));
+  }
+}
+
+std::vector<BundleFile> readBundle(const std::string& dir) {
+  std::vector<BundleFile> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    files.push_back({entry.path().lexically_relative(dir).generic_string(), readFile(entry.path())});
+  }
+  std::sort(files.begin(), files.end(), [](auto& a, auto& b) { return a.path < b.path; });
+  return files;
+}
+
+}  // namespace mlt::farm

@@ -1,0 +1,112 @@
+// The coordinator's state machine, behind the two handler interfaces:
+//   submit -> load + validate the scene -> Queued -> (planner thread) planJob = bootstrap -> Running:
+//   tasks leased FIFO within priorities (higher priority first, then submission order), leases renewed
+//   by heartbeats and requeued when they time out -> each task accepted once, keyed by (job, task),
+//   persisted before it is acknowledged -> Merging (tasks summed in index order) -> Done (EXR + PNG).
+// Restarted on the same state directory it reloads every job, its plan and its accepted tasks, and
+// continues where it stopped.
+#pragma once
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "coordinator/handler.h"
+#include "coordinator/job_store.h"
+#include "coordinator/merge.h"
+
+namespace mlt::farm {
+
+struct CoordinatorOptions {
+  std::string stateDir;
+  double heartbeatSeconds = 1.0;      // told to workers
+  double leaseTimeoutSeconds = 10.0;  // a lease not renewed for this long is queued again
+  bool keepPartials = false;          // also write STATE/jobs/<id>/partials/task-NNNN.exr
+};
+
+class Coordinator final : public ClientHandler, public WorkerHandler {
+ public:
+  explicit Coordinator(CoordinatorOptions options);  // opens/creates the state dir, reloads jobs
+  ~Coordinator() override;
+  void stop();                                        // stops background threads
+
+  // ClientHandler
+  JobStatus submit(SubmitRequest request) override;
+  JobStatus get(const std::string& jobId) override;
+  JobStatus waitForChange(const std::string& jobId, uint64_t afterVersion, std::chrono::milliseconds timeout) override;
+  JobStatus cancel(const std::string& jobId) override;
+  std::vector<JobStatus> list() override;
+  std::string resultPath(const std::string& jobId, const std::string& format) override;
+
+  // WorkerHandler
+  Registration registerWorker(const WorkerInfo& info) override;
+  std::vector<Lease> lease(const std::string& workerId, int maxTasks) override;
+  HeartbeatReply heartbeat(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
+  std::vector<BundleFile> scene(const std::string& sceneHash) override;
+  JobPlan plan(const std::string& jobId) override;
+  UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
+                     uint32_t taskIndex, PartialResult result) override;
+  void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  enum class TaskState : uint8_t { Pending, Leased, Accepted };
+  struct Job {
+    JobRecord rec;
+    JobStatus status;
+    std::shared_ptr<const JobPlan> plan;
+    std::vector<TaskRange> tasks;
+    std::vector<TaskState> taskState;
+    std::deque<uint32_t> pending;
+    Clock::time_point renderStart;
+    uint64_t workDoneAtStart = 0;  // accepted before this process started (for the ETA)
+  };
+  struct LeaseRec {
+    std::string workerId;
+    int64_t job = 0;
+    uint32_t task = 0;
+    Clock::time_point deadline;
+  };
+  struct WorkerRec {
+    WorkerInfo info;
+    Clock::time_point lastSeen;
+  };
+
+  Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
+  void touch(Job& job);                    // bump version, notify watchers; caller holds mu_
+  void refreshProgress(Job& job);
+  void setState(Job& job, JobState s, const std::string& error = {});
+  void startRunning(Job& job);             // plan known: build tasks, requeue the unaccepted ones
+  std::string sceneDir(const std::string& hash) const;
+  std::string jobDir(int64_t id) const;
+  void plannerLoop();
+  void reaperLoop();
+  void merge(int64_t id);
+  void planOne(int64_t id);
+  static uint64_t unitWork(const JobPlan& plan, const WorkUnit& u);
+
+  CoordinatorOptions opt_;
+  std::unique_ptr<JobStore> store_;
+  std::mutex mu_;
+  std::condition_variable changed_;     // status changes (watchers)
+  std::condition_variable work_;        // planner: jobs to plan or merge
+  std::map<int64_t, Job> jobs_;
+  std::map<std::string, LeaseRec> leases_;
+  std::map<std::string, WorkerRec> workers_;
+  uint64_t nextLease_ = 1, nextWorker_ = 1;
+  std::string instance_;                // random per process: ids never collide across restarts
+  bool stopping_ = false;
+  std::thread planner_, reaper_;
+};
+
+std::string formatJobId(int64_t id);
+int64_t parseJobId(const std::string& jobId);  // FarmError NotFound for malformed ids
+
+}  // namespace mlt::farm

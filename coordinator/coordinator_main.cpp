@@ -1,0 +1,62 @@
+// mltfarm-coordinator: the farm's coordinator process.
+//   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token T] [--tls-cert C --tls-key K]
+// Prints "listening on HOST:PORT" on stdout once serving (scripts and tests read the port from it when
+// --listen ends in :0). SIGINT/SIGTERM shut down gracefully; everything accepted is already on disk.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <semaphore>
+
+#include "coordinator/coordinator.h"
+#include "coordinator/service.h"
+
+namespace {
+std::binary_semaphore gStop{0};
+void onSignal(int) { gStop.release(); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mltfarm coordinator: accepts render jobs, runs the bootstrap, leases work to workers"};
+  mlt::farm::ServerOptions server;
+  mlt::farm::CoordinatorOptions opt;
+  std::string logLevel = "info";
+  app.add_option("--listen", server.listen, "address to listen on (loopback by default; port 0 = ephemeral)")
+      ->capture_default_str();
+  app.add_option("--state-dir", opt.stateDir, "state directory (SQLite database, scenes, results)")->required();
+  app.add_option("--token", server.token, "shared token every call must carry (default: none)");
+  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && server.token.empty()) server.token = t;
+  app.add_option("--tls-cert", server.tlsCert, "PEM certificate chain (enables TLS)");
+  app.add_option("--tls-key", server.tlsKey, "PEM private key");
+  app.add_option("--lease-timeout", opt.leaseTimeoutSeconds, "seconds before an unrenewed lease is requeued")
+      ->check(CLI::Range(0.2, 3600.0))->capture_default_str();
+  app.add_option("--heartbeat", opt.heartbeatSeconds, "heartbeat interval told to workers (seconds)")
+      ->check(CLI::Range(0.05, 600.0))->capture_default_str();
+  app.add_flag("--keep-partials", opt.keepPartials, "also write each accepted task as a partial EXR");
+  app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(logLevel));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ coordinator %v");
+
+  try {
+    mlt::farm::Coordinator coordinator(opt);
+    mlt::farm::RunningServer rs = mlt::farm::startServer(server, coordinator, coordinator);
+    std::string host = server.listen.substr(0, server.listen.rfind(':'));
+    std::printf("listening on %s:%d\n", host.c_str(), rs.port);
+    std::fflush(stdout);
+    spdlog::info("event=listening address={}:{} state_dir={} token={} tls={}", host, rs.port, opt.stateDir,
+                 server.token.empty() ? "off" : "on", server.tlsCert.empty() ? "off" : "on");
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    gStop.acquire();
+    spdlog::info("event=shutdown");
+    rs.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    coordinator.stop();
+  } catch (const std::exception& e) {
+    spdlog::error("event=fatal error=\"{}\"", e.what());
+    return 1;
+  }
+  return 0;
+}

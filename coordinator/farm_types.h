@@ -1,0 +1,95 @@
+// Domain types of the farm protocol (no protobuf): what the coordinator's handlers speak. The gRPC
+// services translate them in coordinator/convert.cpp; the render job values themselves go through
+// proto/convert.h.
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/job/render_job.h"
+
+namespace mltfarm::v1 {}  // the wire's protobuf package (proto/mltfarm.proto)
+namespace mlt {
+namespace v1 = ::mltfarm::v1;
+}  // namespace mlt
+
+namespace mlt::farm {
+
+// An error a handler reports to a remote caller; the service maps `code` onto a gRPC status code.
+class FarmError : public std::runtime_error {
+ public:
+  enum class Code { InvalidArgument, NotFound, FailedPrecondition, AlreadyExists, Unauthenticated, Internal,
+                    Unavailable };
+  FarmError(Code code, const std::string& what) : std::runtime_error(what), code_(code) {}
+  Code code() const { return code_; }
+ private:
+  Code code_;
+};
+
+enum class JobState { Queued = 1, Planning = 2, Running = 3, Merging = 4, Done = 5, Failed = 6, Cancelled = 7 };
+const char* jobStateName(JobState s);
+inline bool isTerminal(JobState s) { return s == JobState::Done || s == JobState::Failed || s == JobState::Cancelled; }
+
+struct JobStatus {
+  std::string jobId, name;
+  JobState state = JobState::Queued;
+  std::string phase;
+  int priority = 0;
+  std::string method, sceneHash;
+  int width = 0, height = 0;
+  double b = 0, bStdErr = 0;
+  uint64_t workDone = 0, workTotal = 0;
+  uint32_t unitsDone = 0, unitsTotal = 0, tasksDone = 0, tasksTotal = 0, leasedTasks = 0;
+  double etaSeconds = -1, elapsedSeconds = 0, bootstrapSeconds = 0;
+  std::string error;
+  uint64_t version = 0;  // bumped on every change (WatchJob waits on it); not sent
+};
+
+// A file of a scene bundle: path relative to the bundle root ('/'-separated, no "..").
+struct BundleFile {
+  std::string path;
+  std::string data;
+};
+
+struct SubmitRequest {
+  RenderSettings settings;
+  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false;
+  int priority = 0;
+  std::string name;
+  // Either a bundle (sceneFile is its path inside the bundle) or a coordinator-readable path.
+  std::vector<BundleFile> bundle;
+  std::string bundleSceneFile;
+  std::string coordinatorPath;
+  std::string bundleHash;  // the client's hash of the bundle; checked if set
+};
+
+// A lease: a fixed, contiguous range of work units [unitBegin, unitEnd) of one job (a "task").
+struct Lease {
+  std::string leaseId, jobId;
+  uint32_t taskIndex = 0, unitBegin = 0, unitEnd = 0;
+  std::string sceneHash, sceneFile;
+};
+
+struct WorkerInfo {
+  std::string hostname;
+  int threads = 1;
+  int64_t pid = 0;
+};
+
+struct Registration {
+  std::string workerId;
+  double heartbeatSeconds = 1, leaseTimeoutSeconds = 10;
+};
+
+struct HeartbeatReply {
+  bool unknownWorker = false;
+  std::vector<std::string> cancelledLeases;
+};
+
+struct UploadReply {
+  bool accepted = false;
+  std::string message;
+};
+
+}  // namespace mlt::farm

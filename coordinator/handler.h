@@ -1,0 +1,41 @@
+// The coordinator's behaviour as two interfaces speaking domain types. The gRPC services
+// (coordinator/service.h) do transport only and call these; tests can drive a fake.
+#pragma once
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "common/job/render_job.h"
+#include "coordinator/farm_types.h"
+
+namespace mlt::farm {
+
+class ClientHandler {
+ public:
+  virtual ~ClientHandler() = default;
+  virtual JobStatus submit(SubmitRequest request) = 0;                 // FarmError InvalidArgument, ...
+  virtual JobStatus get(const std::string& jobId) = 0;                 // FarmError NotFound
+  // Blocks until the job's status version exceeds `afterVersion`, or `timeout` passes; returns the status.
+  virtual JobStatus waitForChange(const std::string& jobId, uint64_t afterVersion,
+                                  std::chrono::milliseconds timeout) = 0;
+  virtual JobStatus cancel(const std::string& jobId) = 0;              // FailedPrecondition if terminal
+  virtual std::vector<JobStatus> list() = 0;
+  // Path of the finished image ("exr" or "png"); FailedPrecondition until the job is done.
+  virtual std::string resultPath(const std::string& jobId, const std::string& format) = 0;
+};
+
+class WorkerHandler {
+ public:
+  virtual ~WorkerHandler() = default;
+  virtual Registration registerWorker(const WorkerInfo& info) = 0;
+  virtual std::vector<Lease> lease(const std::string& workerId, int maxTasks) = 0;
+  virtual HeartbeatReply heartbeat(const std::string& workerId, const std::vector<std::string>& leaseIds) = 0;
+  // The bundle's files (NotFound for an unknown hash).
+  virtual std::vector<BundleFile> scene(const std::string& sceneHash) = 0;
+  virtual JobPlan plan(const std::string& jobId) = 0;
+  virtual UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
+                             uint32_t taskIndex, PartialResult result) = 0;
+  virtual void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) = 0;
+};
+
+}  // namespace mlt::farm

@@ -1,0 +1,51 @@
+// The coordinator's persistent state: an embedded SQLite database (`STATE_DIR/farm.db`) holding job
+// records, each job's plan, and every accepted partial result (raw film bytes as a BLOB). Written
+// before a result is acknowledged, so a coordinator killed at any point loses nothing it accepted.
+// Not thread-safe: the caller serializes access.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace mlt::farm {
+
+struct JobRecord {
+  int64_t id = 0;
+  std::string name;
+  int priority = 0;
+  int state = 0;                 // JobState
+  std::string settings;          // serialized mltfarm.v1.RenderSettings (as submitted, scene defaults applied)
+  std::string sceneHash, sceneFile;
+  std::string plan;              // serialized mltfarm.v1.JobPlan; empty until planned
+  uint32_t tasks = 0;
+  std::string error;
+  double submittedAt = 0;        // unix seconds
+};
+
+class JobStore {
+ public:
+  explicit JobStore(const std::string& path);  // creates the schema if needed; throws std::runtime_error
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  int64_t insertJob(const JobRecord& r);       // returns the new id
+  void updateState(int64_t id, int state, const std::string& error);
+  void setPlan(int64_t id, const std::string& plan, uint32_t tasks, int state);
+  std::vector<JobRecord> loadJobs();
+  // Inserts unless (job, task) exists; returns false for a duplicate.
+  bool insertResult(int64_t job, uint32_t task, const std::string& blob);
+  std::vector<uint32_t> acceptedTasks(int64_t job);
+  std::optional<std::string> loadResult(int64_t job, uint32_t task);
+  void deleteResults(int64_t job);
+
+ private:
+  void exec(const char* sql);
+  sqlite3* db_ = nullptr;
+  std::string path_;
+};
+
+}  // namespace mlt::farm

@@ -1,0 +1,39 @@
+// Scene loading shared by coordinator and worker (see scene_loading.h).
+#include "coordinator/scene_loading.h"
+
+#include "common/scene/mitsuba_loader.h"
+#include "coordinator/farm_types.h"
+
+namespace mlt::farm {
+
+SceneDesc loadSceneDesc(const std::string& path) {
+  try {
+    return loadMitsubaScene(path);
+  } catch (const std::exception& e) {
+    throw FarmError(FarmError::Code::InvalidArgument, e.what());
+  }
+}
+
+void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, const SceneDesc& desc) {
+  if (!hasSize) {
+    s.width = desc.camera.width;
+    s.height = desc.camera.height;
+  }
+  if (!hasMaxDepth && desc.maxDepth) s.integrator.maxDepth = *desc.maxDepth;
+  if (!hasRrDepth && desc.rrDepth) s.integrator.rrDepth = *desc.rrDepth;
+  if (s.width <= 0 || s.height <= 0)
+    throw FarmError(FarmError::Code::InvalidArgument,
+                    "settings.width/height: the film is " + std::to_string(s.width) + "x" + std::to_string(s.height));
+}
+
+std::unique_ptr<RenderScene> buildRenderScene(SceneDesc desc, int width, int height) {
+  desc.camera.width = width;
+  desc.camera.height = height;
+  try {
+    return RenderScene::build(desc);
+  } catch (const std::exception& e) {
+    throw FarmError(FarmError::Code::InvalidArgument, desc.sourceFile + ": " + e.what());
+  }
+}
+
+}  // namespace mlt::farm

@@ -1,0 +1,20 @@
+// Loading a scene for the farm: the same code on the coordinator (validation, bootstrap) and the worker
+// (chains), so both build the identical RenderScene for a job.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "common/job/render_job.h"
+#include "common/render/render_scene.h"
+#include "common/scene/scene_desc.h"
+
+namespace mlt::farm {
+
+// loadMitsubaScene; errors become FarmError(InvalidArgument) carrying the loader's message.
+SceneDesc loadSceneDesc(const std::string& path);
+// Fills what the client left to the scene: film size, max depth, rr depth.
+void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, const SceneDesc& desc);
+// Builds the render scene for a film of width x height (the camera's raster follows the job's size).
+std::unique_ptr<RenderScene> buildRenderScene(SceneDesc desc, int width, int height);
+
+}  // namespace mlt::farm

@@ -1,0 +1,329 @@
+// gRPC services of the coordinator (see service.h).
+#include "coordinator/service.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <spdlog/spdlog.h>
+
+#include <fmt/format.h>
+#include <fstream>
+#include <map>
+
+#include "coordinator/convert.h"
+#include "proto/mltfarm.grpc.pb.h"
+
+namespace mlt::farm {
+namespace {
+
+using grpc::ServerContext;
+using grpc::Status;
+using grpc::StatusCode;
+
+constexpr uint64_t kMaxBundleBytes = 4ull << 30;
+
+std::string readPem(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot read TLS file", path));
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Checks the shared token; returns OK when no token is configured.
+Status checkToken(const ServerContext* ctx, const std::string& token) {
+  if (token.empty()) return Status::OK;
+  auto [begin, end] = ctx->client_metadata().equal_range("authorization");
+  for (auto it = begin; it != end; ++it)
+    if (std::string(it->second.data(), it->second.size()) == "Bearer " + token) return Status::OK;
+  return Status(StatusCode::UNAUTHENTICATED, "missing or wrong token (authorization: Bearer ...)");
+}
+
+// Runs `body` with auth and exception mapping.
+template <class F>
+Status guarded(ServerContext* ctx, const std::string& token, const char* rpc, F&& body) {
+  Status auth = checkToken(ctx, token);
+  if (!auth.ok()) {
+    spdlog::warn("rpc={} peer={} event=unauthenticated", rpc, ctx->peer());
+    return auth;
+  }
+  try {
+    return body();
+  } catch (...) {
+    Status s = statusFromException(std::current_exception());
+    spdlog::log(s.error_code() == StatusCode::INTERNAL ? spdlog::level::err : spdlog::level::info,
+                "rpc={} peer={} status={} message=\"{}\"", rpc, ctx->peer(), int(s.error_code()), s.error_message());
+    return s;
+  }
+}
+
+// Appends a chunk to its file; chunks of a file arrive in order.
+void appendChunk(std::map<std::string, std::string>& files, uint64_t& total, const v1::FileChunk& c) {
+  if (c.data().size() > wire::kMaxChunkBytes)
+    throw wire::WireError("chunk.data", fmt::format("{} bytes exceeds the 1 MiB chunk limit", c.data().size()));
+  std::string& f = files[c.path()];
+  if (c.offset() != f.size())
+    throw wire::WireError("chunk.offset", fmt::format("file '{}': offset {} but {} bytes received", c.path(), c.offset(), f.size()));
+  total += c.data().size();
+  if (total > kMaxBundleBytes) throw wire::WireError("chunk", "bundle exceeds 4 GiB");
+  f += c.data();
+}
+
+class CoordinatorServiceImpl final : public v1::Coordinator::Service {
+ public:
+  CoordinatorServiceImpl(ClientHandler& h, std::string token) : h_(h), token_(std::move(token)) {}
+
+  Status SubmitJob(ServerContext* ctx, grpc::ServerReader<v1::SubmitJobRequest>* reader,
+                   v1::SubmitJobResponse* resp) override {
+    return guarded(ctx, token_, "SubmitJob", [&] {
+      v1::SubmitJobRequest msg;
+      if (!reader->Read(&msg) || !msg.has_header())
+        throw wire::WireError("header", "the first message of SubmitJob must be the header");
+      v1::SubmitHeader header = msg.header();
+      wire::checkVersion(header.format_version(), "SubmitHeader");
+      std::map<std::string, std::string> files;
+      uint64_t total = 0;
+      while (reader->Read(&msg)) {
+        if (!msg.has_chunk()) throw wire::WireError("chunk", "only file chunks may follow the header");
+        appendChunk(files, total, msg.chunk());
+      }
+      std::vector<BundleFile> bundle;
+      for (auto& [path, data] : files) bundle.push_back({path, std::move(data)});
+      JobStatus st = h_.submit(fromProto(header, std::move(bundle)));
+      *resp->mutable_status() = toProto(st);
+      return Status::OK;
+    });
+  }
+
+  Status GetJob(ServerContext* ctx, const v1::JobRef* req, v1::JobStatus* resp) override {
+    return guarded(ctx, token_, "GetJob", [&] {
+      wire::checkVersion(req->format_version(), "JobRef");
+      *resp = toProto(h_.get(req->job_id()));
+      return Status::OK;
+    });
+  }
+
+  Status WatchJob(ServerContext* ctx, const v1::JobRef* req, grpc::ServerWriter<v1::JobStatus>* writer) override {
+    return guarded(ctx, token_, "WatchJob", [&] {
+      wire::checkVersion(req->format_version(), "JobRef");
+      JobStatus st = h_.get(req->job_id());
+      uint64_t sent = ~uint64_t(0);
+      while (!ctx->IsCancelled()) {
+        if (st.version != sent) {
+          if (!writer->Write(toProto(st))) break;
+          sent = st.version;
+        }
+        if (isTerminal(st.state)) break;
+        st = h_.waitForChange(req->job_id(), st.version, std::chrono::milliseconds(500));
+      }
+      return Status::OK;
+    });
+  }
+
+  Status CancelJob(ServerContext* ctx, const v1::JobRef* req, v1::JobStatus* resp) override {
+    return guarded(ctx, token_, "CancelJob", [&] {
+      wire::checkVersion(req->format_version(), "JobRef");
+      *resp = toProto(h_.cancel(req->job_id()));
+      return Status::OK;
+    });
+  }
+
+  Status ListJobs(ServerContext* ctx, const v1::ListJobsRequest* req, v1::ListJobsResponse* resp) override {
+    return guarded(ctx, token_, "ListJobs", [&] {
+      wire::checkVersion(req->format_version(), "ListJobsRequest");
+      for (const JobStatus& s : h_.list()) *resp->add_jobs() = toProto(s);
+      return Status::OK;
+    });
+  }
+
+  Status FetchResult(ServerContext* ctx, const v1::FetchResultRequest* req,
+                     grpc::ServerWriter<v1::ResultChunk>* writer) override {
+    return guarded(ctx, token_, "FetchResult", [&] {
+      wire::checkVersion(req->format_version(), "FetchResultRequest");
+      std::string path = h_.resultPath(req->job_id(), req->format().empty() ? "exr" : req->format());
+      std::ifstream in(path, std::ios::binary);
+      if (!in) throw FarmError(FarmError::Code::Internal, fmt::format("{}: cannot read result", path));
+      in.seekg(0, std::ios::end);
+      const uint64_t total = uint64_t(in.tellg());
+      in.seekg(0);
+      std::string buf(wire::kMaxChunkBytes, '\0');
+      uint64_t offset = 0;
+      do {
+        in.read(buf.data(), std::streamsize(buf.size()));
+        v1::ResultChunk c;
+        c.set_offset(offset);
+        c.set_total(total);
+        c.set_data(buf.data(), size_t(in.gcount()));
+        offset += uint64_t(in.gcount());
+        if (!writer->Write(c)) break;
+      } while (offset < total);
+      return Status::OK;
+    });
+  }
+
+ private:
+  ClientHandler& h_;
+  std::string token_;
+};
+
+class WorkerServiceImpl final : public v1::WorkerService::Service {
+ public:
+  WorkerServiceImpl(WorkerHandler& h, std::string token) : h_(h), token_(std::move(token)) {}
+
+  Status Register(ServerContext* ctx, const v1::RegisterRequest* req, v1::RegisterResponse* resp) override {
+    return guarded(ctx, token_, "Register", [&] {
+      wire::checkVersion(req->format_version(), "RegisterRequest");
+      if (req->threads() < 1 || req->threads() > 4096)
+        throw wire::WireError("threads", fmt::format("{} is out of range [1, 4096]", req->threads()));
+      Registration r = h_.registerWorker({req->hostname(), req->threads(), req->pid()});
+      resp->set_worker_id(r.workerId);
+      resp->set_heartbeat_interval_seconds(r.heartbeatSeconds);
+      resp->set_lease_timeout_seconds(r.leaseTimeoutSeconds);
+      return Status::OK;
+    });
+  }
+
+  Status LeaseWork(ServerContext* ctx, const v1::LeaseRequest* req, v1::LeaseResponse* resp) override {
+    return guarded(ctx, token_, "LeaseWork", [&] {
+      wire::checkVersion(req->format_version(), "LeaseRequest");
+      if (req->max_tasks() < 1 || req->max_tasks() > 4096)
+        throw wire::WireError("max_tasks", fmt::format("{} is out of range [1, 4096]", req->max_tasks()));
+      for (const Lease& l : h_.lease(req->worker_id(), req->max_tasks())) *resp->add_leases() = toProto(l);
+      if (resp->leases().empty()) resp->set_retry_after_seconds(0.2);
+      return Status::OK;
+    });
+  }
+
+  Status Heartbeat(ServerContext* ctx, const v1::HeartbeatRequest* req, v1::HeartbeatResponse* resp) override {
+    return guarded(ctx, token_, "Heartbeat", [&] {
+      wire::checkVersion(req->format_version(), "HeartbeatRequest");
+      HeartbeatReply r = h_.heartbeat(req->worker_id(), {req->lease_ids().begin(), req->lease_ids().end()});
+      resp->set_unknown_worker(r.unknownWorker);
+      for (auto& id : r.cancelledLeases) resp->add_cancelled_lease_ids(id);
+      return Status::OK;
+    });
+  }
+
+  Status FetchScene(ServerContext* ctx, const v1::FetchSceneRequest* req,
+                    grpc::ServerWriter<v1::FileChunk>* writer) override {
+    return guarded(ctx, token_, "FetchScene", [&] {
+      wire::checkVersion(req->format_version(), "FetchSceneRequest");
+      for (const BundleFile& f : h_.scene(req->scene_hash())) {
+        uint64_t offset = 0;
+        do {
+          size_t n = std::min<uint64_t>(wire::kMaxChunkBytes, f.data.size() - offset);
+          v1::FileChunk c;
+          c.set_path(f.path);
+          c.set_offset(offset);
+          c.set_data(f.data.data() + offset, n);
+          offset += n;
+          c.set_last(offset == f.data.size());
+          if (!writer->Write(c)) return Status(StatusCode::CANCELLED, "client went away");
+        } while (offset < f.data.size());
+      }
+      return Status::OK;
+    });
+  }
+
+  Status FetchPlan(ServerContext* ctx, const v1::FetchPlanRequest* req, v1::JobPlan* resp) override {
+    return guarded(ctx, token_, "FetchPlan", [&] {
+      wire::checkVersion(req->format_version(), "FetchPlanRequest");
+      *resp = wire::toProto(h_.plan(req->job_id()));
+      return Status::OK;
+    });
+  }
+
+  Status UploadResult(ServerContext* ctx, grpc::ServerReader<v1::UploadResultRequest>* reader,
+                      v1::UploadResultResponse* resp) override {
+    return guarded(ctx, token_, "UploadResult", [&] {
+      v1::UploadResultRequest msg;
+      if (!reader->Read(&msg) || !msg.has_header())
+        throw wire::WireError("header", "the first message of UploadResult must be the header");
+      const v1::UploadHeader header = msg.header();
+      wire::checkVersion(header.format_version(), "UploadHeader");
+      const v1::PartialHeader& ph = header.partial();
+      if (ph.width() < 1 || ph.height() < 1 || ph.width() > 16384 || ph.height() > 16384)
+        throw wire::WireError("partial.width", fmt::format("film {}x{} out of range", ph.width(), ph.height()));
+      if (ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height()))
+        throw wire::WireError("partial.film_bytes", fmt::format("{} for a {}x{} film", ph.film_bytes(), ph.width(), ph.height()));
+      std::string film;
+      film.reserve(ph.film_bytes());
+      while (reader->Read(&msg)) {
+        if (!msg.has_film_chunk()) throw wire::WireError("film_chunk", "only film chunks may follow the header");
+        if (msg.film_chunk().size() > wire::kMaxChunkBytes)
+          throw wire::WireError("film_chunk", fmt::format("{} bytes exceeds the 1 MiB chunk limit", msg.film_chunk().size()));
+        if (film.size() + msg.film_chunk().size() > ph.film_bytes())
+          throw wire::WireError("film_chunk", "more film bytes than announced");
+        film += msg.film_chunk();
+      }
+      PartialResult result = wire::fromProto(ph, film);
+      UploadReply r = h_.upload(header.worker_id(), header.lease_id(), header.job_id(), header.task_index(), std::move(result));
+      resp->set_accepted(r.accepted);
+      resp->set_message(r.message);
+      return Status::OK;
+    });
+  }
+
+  Status ReturnLeases(ServerContext* ctx, const v1::ReturnLeaseRequest* req, v1::ReturnLeaseResponse*) override {
+    return guarded(ctx, token_, "ReturnLeases", [&] {
+      wire::checkVersion(req->format_version(), "ReturnLeaseRequest");
+      h_.returnLeases(req->worker_id(), {req->lease_ids().begin(), req->lease_ids().end()});
+      return Status::OK;
+    });
+  }
+
+ private:
+  WorkerHandler& h_;
+  std::string token_;
+};
+
+}  // namespace
+
+grpc::Status statusFromException(std::exception_ptr e) {
+  try {
+    std::rethrow_exception(e);
+  } catch (const FarmError& f) {
+    StatusCode code = StatusCode::INTERNAL;
+    switch (f.code()) {
+      case FarmError::Code::InvalidArgument: code = StatusCode::INVALID_ARGUMENT; break;
+      case FarmError::Code::NotFound: code = StatusCode::NOT_FOUND; break;
+      case FarmError::Code::FailedPrecondition: code = StatusCode::FAILED_PRECONDITION; break;
+      case FarmError::Code::AlreadyExists: code = StatusCode::ALREADY_EXISTS; break;
+      case FarmError::Code::Unauthenticated: code = StatusCode::UNAUTHENTICATED; break;
+      case FarmError::Code::Unavailable: code = StatusCode::UNAVAILABLE; break;
+      case FarmError::Code::Internal: code = StatusCode::INTERNAL; break;
+    }
+    return Status(code, f.what());
+  } catch (const wire::WireError& w) {
+    return Status(StatusCode::INVALID_ARGUMENT, w.what());
+  } catch (const std::exception& x) {
+    return Status(StatusCode::INTERNAL, x.what());
+  } catch (...) {
+    return Status(StatusCode::INTERNAL, "unknown error");
+  }
+}
+
+RunningServer startServer(const ServerOptions& options, ClientHandler& clients, WorkerHandler& workers) {
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  RunningServer rs;
+  rs.clientService = std::make_unique<CoordinatorServiceImpl>(clients, options.token);
+  rs.workerService = std::make_unique<WorkerServiceImpl>(workers, options.token);
+  std::shared_ptr<grpc::ServerCredentials> creds;
+  if (!options.tlsCert.empty() || !options.tlsKey.empty()) {
+    if (options.tlsCert.empty() || options.tlsKey.empty())
+      throw std::runtime_error("--tls-cert and --tls-key must be given together");
+    grpc::SslServerCredentialsOptions ssl;
+    ssl.pem_key_cert_pairs.push_back({readPem(options.tlsKey), readPem(options.tlsCert)});
+    creds = grpc::SslServerCredentials(ssl);
+  } else {
+    creds = grpc::InsecureServerCredentials();
+  }
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options.listen, creds, &rs.port);
+  builder.RegisterService(rs.clientService.get());
+  builder.RegisterService(rs.workerService.get());
+  rs.server = builder.BuildAndStart();
+  if (!rs.server || rs.port == 0) throw std::runtime_error(fmt::format("cannot listen on {}", options.listen));
+  rs.server->GetHealthCheckService()->SetServingStatus(true);
+  return rs;
+}
+
+}  // namespace mlt::farm

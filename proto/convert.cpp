@@ -1,0 +1,310 @@
+// Wire <-> domain conversion with range validation (see convert.h).
+#include "proto/convert.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fmt/format.h>
+
+namespace mlt::wire {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "film bytes are little-endian");
+
+constexpr int64_t kMaxFilmSide = 16384;
+constexpr double kMaxMutationsPerPixel = 1e6;
+constexpr int64_t kMaxSpp = 1 << 20;
+constexpr int64_t kMaxChains = 1 << 20;
+constexpr int64_t kMaxBootstrap = 100'000'000;
+constexpr int64_t kMaxDepth = 1024;
+
+void requireRange(const char* field, int64_t v, int64_t lo, int64_t hi) {
+  if (v < lo || v > hi) throw WireError(field, fmt::format("{} is out of range [{}, {}]", v, lo, hi));
+}
+void requireRange(const char* field, double v, double lo, double hi, bool loOpen = false) {
+  if (!std::isfinite(v) || v > hi || v < lo || (loOpen && v == lo))
+    throw WireError(field, fmt::format("{} is out of range {}{}, {}]", v, loOpen ? "(" : "[", lo, hi));
+}
+
+std::string deterministicBytes(const google::protobuf::MessageLite& m) {
+  std::string out;
+  {
+    google::protobuf::io::StringOutputStream sos(&out);
+    google::protobuf::io::CodedOutputStream cos(&sos);
+    cos.SetSerializationDeterministic(true);
+    m.SerializeToCodedStream(&cos);
+  }
+  return out;
+}
+
+}  // namespace
+
+void checkVersion(uint32_t version, const char* message) {
+  if (version != kFormatVersion)
+    throw WireError(std::string(message) + ".format_version",
+                    fmt::format("peer speaks format version {}, this build speaks {}", version, kFormatVersion));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Settings
+// ---------------------------------------------------------------------------------------------
+v1::RenderSettings toProto(const RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth) {
+  v1::RenderSettings p;
+  p.set_method(methodName(s.method));
+  p.set_seed(s.seed);
+  p.set_width(s.width);
+  p.set_height(s.height);
+  p.set_has_size(hasSize);
+  p.set_max_depth(s.integrator.maxDepth);
+  p.set_rr_depth(s.integrator.rrDepth);
+  p.set_has_max_depth(hasMaxDepth);
+  p.set_has_rr_depth(hasRrDepth);
+  p.set_mis_heuristic(s.integrator.heuristic == MisHeuristic::Balance ? "balance" : "power");
+  p.set_spp(s.spp);
+  p.set_samples_per_unit(s.samplesPerUnit);
+  p.set_mutations_per_pixel(s.mutationsPerPixel);
+  p.set_chains(s.chains);
+  p.set_bootstrap_samples(s.bootstrapSamples);
+  p.set_large_step_prob(s.largeStepProb);
+  p.set_kernel(s.kernel == MutationKernel::Kelemen ? "kelemen" : "gaussian");
+  p.set_kelemen_s1(s.kelemenS1);
+  p.set_kelemen_s2(s.kelemenS2);
+  p.set_gaussian_sigma(s.gaussianSigma);
+  p.set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value" : "kelemen-mis");
+  p.set_separate_direct(s.separateDirect);
+  return p;
+}
+
+SubmittedSettings fromProto(const v1::RenderSettings& p) {
+  SubmittedSettings out;
+  RenderSettings& s = out.settings;
+  try {
+    s.method = parseMethod(p.method());
+  } catch (const std::exception& e) {
+    throw WireError("settings.method", e.what());
+  }
+  s.seed = p.seed();
+  out.hasSize = p.has_size();
+  if (p.has_size()) {
+    requireRange("settings.width", p.width(), 1, kMaxFilmSide);
+    requireRange("settings.height", p.height(), 1, kMaxFilmSide);
+    s.width = int(p.width());
+    s.height = int(p.height());
+  } else if (p.width() != 0 || p.height() != 0) {
+    throw WireError("settings.has_size", "width/height given without has_size");
+  }
+  out.hasMaxDepth = p.has_max_depth();
+  if (p.has_max_depth()) {
+    requireRange("settings.max_depth", p.max_depth(), -1, kMaxDepth);
+    s.integrator.maxDepth = int(p.max_depth());
+  }
+  out.hasRrDepth = p.has_rr_depth();
+  if (p.has_rr_depth()) {
+    requireRange("settings.rr_depth", p.rr_depth(), 0, kMaxDepth);
+    s.integrator.rrDepth = int(p.rr_depth());
+  }
+  if (p.mis_heuristic() == "balance") s.integrator.heuristic = MisHeuristic::Balance;
+  else if (p.mis_heuristic() == "power" || p.mis_heuristic().empty()) s.integrator.heuristic = MisHeuristic::Power;
+  else throw WireError("settings.mis_heuristic", fmt::format("unknown '{}' (balance|power)", p.mis_heuristic()));
+  requireRange("settings.spp", p.spp(), 1, kMaxSpp);
+  s.spp = int(p.spp());
+  requireRange("settings.samples_per_unit", p.samples_per_unit(), 0, kMaxSpp);
+  s.samplesPerUnit = int(p.samples_per_unit());
+  requireRange("settings.mutations_per_pixel", p.mutations_per_pixel(), 0.0, kMaxMutationsPerPixel, true);
+  s.mutationsPerPixel = p.mutations_per_pixel();
+  requireRange("settings.chains", p.chains(), 0, kMaxChains);
+  s.chains = int(p.chains());
+  requireRange("settings.bootstrap_samples", p.bootstrap_samples(), 1, kMaxBootstrap);
+  s.bootstrapSamples = int(p.bootstrap_samples());
+  requireRange("settings.large_step_prob", p.large_step_prob(), 0.0, 1.0);
+  s.largeStepProb = float(p.large_step_prob());
+  if (p.kernel() == "kelemen" || p.kernel().empty()) s.kernel = MutationKernel::Kelemen;
+  else if (p.kernel() == "gaussian") s.kernel = MutationKernel::Gaussian;
+  else throw WireError("settings.kernel", fmt::format("unknown '{}' (kelemen|gaussian)", p.kernel()));
+  requireRange("settings.kelemen_s1", p.kelemen_s1(), 0.0, 1.0, true);
+  requireRange("settings.kelemen_s2", p.kelemen_s2(), p.kelemen_s1(), 1.0);
+  requireRange("settings.gaussian_sigma", p.gaussian_sigma(), 0.0, 1.0, true);
+  s.kelemenS1 = float(p.kelemen_s1());
+  s.kelemenS2 = float(p.kelemen_s2());
+  s.gaussianSigma = float(p.gaussian_sigma());
+  if (p.splatting() == "expected-value" || p.splatting().empty()) s.splatting = MltSplatting::ExpectedValue;
+  else if (p.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
+  else throw WireError("settings.splatting", fmt::format("unknown '{}' (expected-value|kelemen-mis)", p.splatting()));
+  s.separateDirect = p.separate_direct();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plan
+// ---------------------------------------------------------------------------------------------
+v1::JobPlan toProto(const JobPlan& plan) {
+  v1::JobPlan p;
+  p.set_format_version(kFormatVersion);
+  *p.mutable_settings() = toProto(plan.settings, true, true, true);
+  auto* n = p.mutable_norm();
+  n->set_b(plan.norm.b);
+  n->set_b_std_err(plan.norm.bStdErr);
+  for (double v : plan.norm.bk) n->add_bk(v);
+  for (double v : plan.norm.bkStdErr) n->add_bk_std_err(v);
+  for (uint64_t v : plan.norm.mutationsPerLength) n->add_mutations_per_length(v);
+  n->set_total_mutations(plan.norm.totalMutations);
+  n->set_bootstrap_samples(plan.norm.bootstrapSamples);
+  n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
+  for (const WorkUnit& u : plan.units) {
+    auto* w = p.add_units();
+    w->set_index(u.index);
+    w->set_sample_begin(u.sampleBegin);
+    w->set_sample_end(u.sampleEnd);
+    w->set_start_candidate(u.startCandidate);
+    w->set_path_length(u.pathLength);
+    w->set_mutations(u.mutations);
+    w->set_start_contribution(u.startContribution);
+  }
+  return p;
+}
+
+JobPlan fromProto(const v1::JobPlan& p) {
+  checkVersion(p.format_version(), "JobPlan");
+  JobPlan plan;
+  SubmittedSettings s = fromProto(p.settings());
+  if (!s.hasSize) throw WireError("plan.settings.has_size", "a plan has a resolved film size");
+  plan.settings = s.settings;
+  const auto& n = p.norm();
+  plan.norm.b = n.b();
+  plan.norm.bStdErr = n.b_std_err();
+  plan.norm.bk.assign(n.bk().begin(), n.bk().end());
+  plan.norm.bkStdErr.assign(n.bk_std_err().begin(), n.bk_std_err().end());
+  plan.norm.mutationsPerLength.assign(n.mutations_per_length().begin(), n.mutations_per_length().end());
+  plan.norm.totalMutations = n.total_mutations();
+  plan.norm.bootstrapSamples = n.bootstrap_samples();
+  plan.norm.bootstrapSeconds = n.bootstrap_seconds();
+  plan.units.reserve(p.units_size());
+  for (int i = 0; i < p.units_size(); ++i) {
+    const auto& w = p.units(i);
+    if (w.index() != uint32_t(i)) throw WireError("plan.units.index", fmt::format("unit {} has index {}", i, w.index()));
+    WorkUnit u;
+    u.index = w.index();
+    u.sampleBegin = w.sample_begin();
+    u.sampleEnd = w.sample_end();
+    u.startCandidate = w.start_candidate();
+    u.pathLength = w.path_length();
+    u.mutations = w.mutations();
+    u.startContribution = w.start_contribution();
+    plan.units.push_back(u);
+  }
+  return plan;
+}
+
+std::string jobPlanBytes(const JobPlan& plan) { return deterministicBytes(toProto(plan)); }
+
+JobPlan parseJobPlan(const std::string& bytes) {
+  v1::JobPlan p;
+  if (!p.ParseFromString(bytes)) throw WireError("JobPlan", "unparsable bytes");
+  return fromProto(p);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Partial results
+// ---------------------------------------------------------------------------------------------
+v1::ChainStats toProto(const ChainStats& s) {
+  v1::ChainStats p;
+  for (uint64_t v : s.proposedPerLength) p.add_proposed_per_length(v);
+  for (uint64_t v : s.acceptedPerLength) p.add_accepted_per_length(v);
+  p.set_large_proposed(s.largeProposed);
+  p.set_large_accepted(s.largeAccepted);
+  p.set_small_proposed(s.smallProposed);
+  p.set_small_accepted(s.smallAccepted);
+  return p;
+}
+
+ChainStats fromProto(const v1::ChainStats& p) {
+  ChainStats s;
+  s.proposedPerLength.assign(p.proposed_per_length().begin(), p.proposed_per_length().end());
+  s.acceptedPerLength.assign(p.accepted_per_length().begin(), p.accepted_per_length().end());
+  s.largeProposed = p.large_proposed();
+  s.largeAccepted = p.large_accepted();
+  s.smallProposed = p.small_proposed();
+  s.smallAccepted = p.small_accepted();
+  return s;
+}
+
+size_t filmByteSize(int width, int height) { return size_t(width) * size_t(height) * 7 * sizeof(double); }
+
+std::string encodeFilm(const Film& film) {
+  const size_t n = film.pixelCount();
+  std::string out(filmByteSize(film.width(), film.height()), '\0');
+  char* dst = out.data();
+  if (n) {
+    std::memcpy(dst, film.pixelSums().data(), n * sizeof(RGBd));
+    std::memcpy(dst + n * sizeof(RGBd), film.pixelCounts().data(), n * sizeof(double));
+    std::memcpy(dst + n * (sizeof(RGBd) + sizeof(double)), film.splatSums().data(), n * sizeof(RGBd));
+  }
+  return out;
+}
+
+Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite) {
+  if (width <= 0 || height <= 0 || width > kMaxFilmSide || height > kMaxFilmSide)
+    throw WireError("partial.width", fmt::format("film {}x{} out of range", width, height));
+  if (bytes.size() != filmByteSize(width, height))
+    throw WireError("film_chunk", fmt::format("film {}x{} needs {} bytes, got {}", width, height,
+                                              filmByteSize(width, height), bytes.size()));
+  static_assert(sizeof(RGBd) == 3 * sizeof(double));
+  Film film(width, height);
+  const size_t n = film.pixelCount();
+  const char* src = bytes.data();
+  std::memcpy(film.pixelSums().data(), src, n * sizeof(RGBd));
+  std::memcpy(film.pixelCounts().data(), src + n * sizeof(RGBd), n * sizeof(double));
+  std::memcpy(film.splatSums().data(), src + n * (sizeof(RGBd) + sizeof(double)), n * sizeof(RGBd));
+  film.setNonFiniteSamples(nonFinite);
+  return film;
+}
+
+v1::PartialHeader partialHeader(const PartialResult& r) {
+  v1::PartialHeader h;
+  h.set_format_version(kFormatVersion);
+  h.set_width(r.film.width());
+  h.set_height(r.film.height());
+  h.set_samples(r.samples);
+  *h.mutable_stats() = toProto(r.stats);
+  for (uint32_t u : r.units) h.add_units(u);
+  h.set_seconds(r.seconds);
+  h.set_non_finite(r.film.nonFiniteSamples());
+  h.set_film_bytes(filmByteSize(r.film.width(), r.film.height()));
+  return h;
+}
+
+PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes) {
+  checkVersion(h.format_version(), "PartialHeader");
+  PartialResult r;
+  r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite());
+  r.samples = h.samples();
+  r.stats = fromProto(h.stats());
+  r.units.assign(h.units().begin(), h.units().end());
+  r.seconds = h.seconds();
+  return r;
+}
+
+std::string serializePartial(const PartialResult& r) {
+  std::string header = deterministicBytes(partialHeader(r));
+  std::string out(8, '\0');
+  uint64_t len = header.size();
+  std::memcpy(out.data(), &len, 8);
+  out += header;
+  out += encodeFilm(r.film);
+  return out;
+}
+
+PartialResult parsePartial(const std::string& blob) {
+  uint64_t len = 0;
+  if (blob.size() < 8) throw WireError("partial", "blob too short");
+  std::memcpy(&len, blob.data(), 8);
+  if (len > blob.size() - 8) throw WireError("partial", "header length beyond blob");
+  v1::PartialHeader h;
+  if (!h.ParseFromArray(blob.data() + 8, int(len))) throw WireError("partial", "unparsable header");
+  return fromProto(h, blob.substr(8 + len));
+}
+
+}  // namespace mlt::wire

@@ -1,0 +1,68 @@
+// The one conversion file between the wire (proto/mltfarm.proto) and the domain types of
+// common/job/render_job.h. FromProto validates every range and throws WireError naming the field;
+// the services turn it into INVALID_ARGUMENT. Nothing outside coordinator/, worker/ and the farm
+// subcommands includes this header.
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "common/job/render_job.h"
+#include "proto/mltfarm.pb.h"
+
+namespace mlt {
+namespace v1 = ::mltfarm::v1;  // the wire's protobuf package
+}  // namespace mlt
+
+namespace mlt::wire {
+
+// Bumped whenever a message changes meaning. Every message that crosses processes carries it.
+inline constexpr uint32_t kFormatVersion = 1;
+// Largest piece of a streamed film, bundle or result (gRPC's default receive limit is 4 MiB).
+inline constexpr size_t kMaxChunkBytes = 1 << 20;
+
+// Invalid input from the wire: `field` names the offending field ("settings.width").
+class WireError : public std::invalid_argument {
+ public:
+  WireError(const std::string& field, const std::string& what)
+      : std::invalid_argument(field + ": " + what), field_(field) {}
+  const std::string& field() const { return field_; }
+ private:
+  std::string field_;
+};
+
+// Throws WireError unless version == kFormatVersion.
+void checkVersion(uint32_t version, const char* message);
+
+// Settings as submitted: which optional fields the client set.
+struct SubmittedSettings {
+  RenderSettings settings;
+  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false;
+};
+v1::RenderSettings toProto(const RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth);
+SubmittedSettings fromProto(const v1::RenderSettings& p);  // validates ranges
+
+v1::JobPlan toProto(const JobPlan& plan);
+JobPlan fromProto(const v1::JobPlan& p);                  // validates
+
+v1::ChainStats toProto(const ChainStats& s);
+ChainStats fromProto(const v1::ChainStats& p);
+
+// A PartialResult travels as a header (everything but the raw sums) + the film's raw bytes.
+v1::PartialHeader partialHeader(const PartialResult& r);
+// Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), splat sums (3/pixel),
+// little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
+std::string encodeFilm(const Film& film);
+Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite);
+size_t filmByteSize(int width, int height);
+PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes);  // validates
+
+// Whole PartialResult as one blob (header length + header + film bytes): the coordinator's database
+// and the partial EXR metadata use it.
+std::string serializePartial(const PartialResult& r);
+PartialResult parsePartial(const std::string& blob);
+
+std::string jobPlanBytes(const JobPlan& plan);           // deterministic serialization
+JobPlan parseJobPlan(const std::string& bytes);
+
+}  // namespace mlt::wire

@@ -1,0 +1,31 @@
+// Worker -> coordinator calls that move bulk data: fetching a scene bundle and uploading a partial film
+// as a client stream of chunks of at most 1 MiB (never relying on raising gRPC's 4 MiB limit).
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/job/render_job.h"
+#include "coordinator/client.h"
+#include "coordinator/farm_types.h"
+#include "proto/mltfarm.grpc.pb.h"
+
+namespace mlt::farm {
+
+struct UploadTarget {
+  std::string workerId, leaseId, jobId;
+  uint32_t taskIndex = 0;
+};
+
+// Streams `result`; returns the coordinator's reply. Throws RpcError on a failed call. `chunks`, if
+// given, receives the number of film chunks sent.
+UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o, const UploadTarget& target,
+                          const PartialResult& result, size_t* chunks = nullptr);
+
+// Fetches a bundle by hash and checks that its content hashes to `sceneHash`.
+std::vector<BundleFile> fetchScene(v1::WorkerService::Stub& stub, const ChannelOptions& o,
+                                   const std::string& sceneHash);
+
+JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId);
+
+}  // namespace mlt::farm

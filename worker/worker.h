@@ -1,0 +1,72 @@
+// The worker process's loop: register with the coordinator (workers dial it), lease tasks up to its
+// thread count, run each task (its work units in index order) on its own thread, upload the partial
+// film, heartbeat the leases it holds. Scenes are cached by content hash (on disk and built in memory),
+// plans by job. When the coordinator is away it retries with exponential backoff and registers again
+// after a coordinator restart. stop() (SIGTERM) stops leasing, abandons unfinished tasks between work
+// units and returns their leases so other workers pick them up at once.
+#pragma once
+#include <atomic>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/job/render_job.h"
+#include "common/render/render_scene.h"
+#include "coordinator/client.h"
+#include "coordinator/farm_types.h"
+#include "proto/mltfarm.grpc.pb.h"
+
+namespace mlt::farm {
+
+struct WorkerOptions {
+  ChannelOptions coordinator;
+  int threads = 0;          // parallel tasks; 0 = hardware concurrency
+  std::string cacheDir;     // scene bundles by hash; default $TMPDIR/mltfarm-worker-cache
+  bool drain = false;       // on stop: finish the tasks in hand instead of returning them
+};
+
+class Worker {
+ public:
+  explicit Worker(WorkerOptions options);
+  ~Worker();
+  // Runs until stop() is called; returns the process exit code.
+  int run();
+  void stop() { stop_ = true; }
+
+ private:
+  struct Active {
+    Lease lease;
+    std::atomic<bool> cancel{false};
+    std::atomic<bool> finished{false};
+    std::thread thread;
+  };
+  struct SceneEntry {
+    std::mutex mu;
+    std::shared_ptr<const RenderScene> scene;
+  };
+
+  bool registerWithBackoff();
+  void heartbeatLoop();
+  void runTask(Active* a);
+  std::shared_ptr<const JobPlan> planFor(const std::string& jobId);
+  std::shared_ptr<const RenderScene> sceneFor(const Lease& l, const JobPlan& plan);
+  void reapFinished();
+  void backoff(int& attempt);
+
+  WorkerOptions opt_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::WorkerService::Stub> stub_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> reregister_{false};
+  std::mutex mu_;  // guards workerId_, active_, plans_, scenes_
+  std::string workerId_;
+  double heartbeatSeconds_ = 1;
+  std::vector<std::unique_ptr<Active>> active_;
+  std::map<std::string, std::shared_ptr<const JobPlan>> plans_;
+  std::map<std::string, std::shared_ptr<SceneEntry>> scenes_;  // key: hash + film size
+};
+
+}  // namespace mlt::farm

@@ -1,0 +1,46 @@
+// mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
+//   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
+// SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <cstdlib>
+
+#include "worker/worker.h"
+
+namespace {
+mlt::farm::Worker* gWorker = nullptr;
+void onSignal(int) {
+  if (gWorker) gWorker->stop();  // sets an atomic flag: async-signal-safe
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mltfarm worker: runs leased chains / sample batches for a coordinator"};
+  mlt::farm::WorkerOptions opt;
+  std::string logLevel = "info";
+  app.add_option("--coordinator", opt.coordinator.address, "coordinator address HOST:PORT")->required();
+  app.add_option("--threads", opt.threads, "tasks run in parallel (default: all cores)")->check(CLI::Range(0, 4096));
+  app.add_option("--token", opt.coordinator.token, "shared token (or MLTFARM_TOKEN)");
+  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && opt.coordinator.token.empty()) opt.coordinator.token = t;
+  app.add_option("--tls-ca", opt.coordinator.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
+  app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
+  app.add_flag("--drain", opt.drain, "on SIGTERM finish the tasks in hand instead of returning them");
+  app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(logLevel));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");
+  try {
+    mlt::farm::Worker worker(opt);
+    gWorker = &worker;
+    std::signal(SIGTERM, onSignal);
+    std::signal(SIGINT, onSignal);
+    int rc = worker.run();
+    gWorker = nullptr;
+    return rc;
+  } catch (const std::exception& e) {
+    spdlog::error("event=fatal error=\"{}\"", e.what());
+    return 1;
+  }
+}
