@@ -108,6 +108,11 @@ def spread_chart(out, scene, runs):
                 ax.scatter([x], [e / med], s=28 if flagged else 14, marker="x" if flagged else "o",
                            color="red" if flagged else cmap(bj / max(1, len(budgets) - 1)), zorder=3)
     ax.axhline(1.0, color="gray", linewidth=0.8)
+    budget_values = {int(r["budget_index"]): float(r["budget"]) for r in runs}
+    for bj, bi in enumerate(budgets):
+        ax.scatter([], [], s=14, color=cmap(bj / max(1, len(budgets) - 1)), label="budget %g" % budget_values[bi])
+    ax.scatter([], [], s=28, marker="x", color="red", label="flagged run")
+    ax.legend(fontsize=7, loc="best")
     ax.set_yscale("log")
     ax.set_xticks(range(len(methods)))
     ax.set_xticklabels(methods, rotation=20)
@@ -128,9 +133,18 @@ def acceptance_chart(out, scene, rows):
         d[k][0] += int(r["proposed"])
         d[k][1] += int(r["accepted"])
     fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
+    rates = [d[k][1] / d[k][0] for d in per.values() for k in d if d[k][0] > 0]
+    positive = [r for r in rates if r > 0]
+    floor = min(positive) / 3 if positive else 1e-4  # where a rate of exactly 0 is drawn
+    zero_label = "acceptance 0 (no move accepted)"
     for method, d in per.items():
         ks = sorted(k for k in d if d[k][0] > 0)
-        ax.plot(ks, [d[k][1] / d[k][0] for k in ks], marker="o", label=method)
+        ys = [d[k][1] / d[k][0] for k in ks]
+        line, = ax.plot(ks, [max(y, floor) for y in ys], marker="o", label=method)
+        zeros = [k for k, y in zip(ks, ys) if y == 0]
+        if zeros:
+            ax.scatter(zeros, [floor] * len(zeros), marker="v", s=60, color="red", zorder=4, label=zero_label)
+            zero_label = None
     ax.set_yscale("log")
     ax.set_xlabel("path length k (segments; pssmlt: 0 = all lengths)")
     ax.set_ylabel("acceptance rate (all runs)")
