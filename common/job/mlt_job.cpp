@@ -83,6 +83,8 @@ JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& setti
     throw std::invalid_argument("settings: bootstrap samples must be >= 2, got " + std::to_string(s.bootstrapSamples));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
   if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
+  if (s.separateDirect && s.method == Method::PSSMLT)
+    throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
   KelemenSource validate(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
 
   JobPlan plan;

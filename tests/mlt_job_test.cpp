@@ -1,0 +1,179 @@
+// The Markov-chain job API on a small Cornell box: determinism (same unit -> identical partial result;
+// the plan is independent of the thread count), exact merging (any grouping of units develops to the same
+// bytes), the loud replay check, chain allocation, and normalization (K chains of M mutations vs one
+// chain of K*M agree within the spread of independent runs).
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "common/job/render_job.h"
+#include "common/render/render_scene.h"
+#include "tests/support/test_scenes.h"
+
+namespace mlt {
+namespace {
+
+const RenderScene& cornell() {
+  static const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(16, 12));
+  return *scene;
+}
+
+RenderSettings settingsFor(Method m, uint64_t seed) {
+  RenderSettings s;
+  s.method = m;
+  s.seed = seed;
+  s.integrator.maxDepth = 4;
+  s.mutationsPerPixel = 8;
+  s.bootstrapSamples = 4000;
+  s.chains = 12;
+  return s;
+}
+
+std::vector<PartialResult> runAll(const RenderScene& scene, const JobPlan& plan) {
+  std::vector<PartialResult> results(plan.units.size());
+  tbb::parallel_for(size_t(0), plan.units.size(), [&](size_t i) { results[i] = runWorkUnit(scene, plan, plan.units[i]); });
+  return results;
+}
+
+bool sameBytes(const std::vector<Color>& a, const std::vector<Color>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)) == 0;
+}
+
+bool sameFilm(const Film& a, const Film& b) {
+  return a.splatSums().size() == b.splatSums().size() &&
+         std::memcmp(a.splatSums().data(), b.splatSums().data(), a.splatSums().size() * sizeof(RGBd)) == 0 &&
+         std::memcmp(a.pixelSums().data(), b.pixelSums().data(), a.pixelSums().size() * sizeof(RGBd)) == 0 &&
+         a.pixelCounts() == b.pixelCounts();
+}
+
+const Method kMethods[] = {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT};
+
+TEST(MltJob, SameUnitGivesIdenticalPartialResult) {
+  for (Method m : kMethods) {
+    const JobPlan plan = planJob(cornell(), settingsFor(m, 3));
+    ASSERT_FALSE(plan.units.empty());
+    for (size_t i : {size_t(0), plan.units.size() - 1}) {
+      const PartialResult a = runWorkUnit(cornell(), plan, plan.units[i]);
+      const PartialResult b = runWorkUnit(cornell(), plan, plan.units[i]);
+      EXPECT_TRUE(sameFilm(a.film, b.film)) << methodName(m) << " unit " << i;
+      EXPECT_EQ(a.samples, plan.units[i].mutations);
+      EXPECT_EQ(a.stats.largeAccepted, b.stats.largeAccepted);
+      EXPECT_EQ(a.stats.smallAccepted, b.stats.smallAccepted);
+      EXPECT_EQ(a.stats.largeProposed + a.stats.smallProposed, plan.units[i].mutations);
+    }
+  }
+}
+
+TEST(MltJob, PlanIsIndependentOfThreadCount) {
+  for (Method m : kMethods) {
+    JobPlan a, b;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      a = planJob(cornell(), settingsFor(m, 5));
+    }
+    b = planJob(cornell(), settingsFor(m, 5));
+    EXPECT_EQ(std::memcmp(&a.norm.b, &b.norm.b, sizeof(double)), 0) << methodName(m);
+    EXPECT_EQ(a.norm.bk, b.norm.bk);
+    ASSERT_EQ(a.units.size(), b.units.size());
+    for (size_t i = 0; i < a.units.size(); ++i) {
+      EXPECT_EQ(a.units[i].startCandidate, b.units[i].startCandidate);
+      EXPECT_EQ(a.units[i].mutations, b.units[i].mutations);
+      EXPECT_EQ(a.units[i].pathLength, b.units[i].pathLength);
+    }
+  }
+}
+
+TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
+  for (Method m : kMethods) {
+    RenderSettings s = settingsFor(m, 7);
+    if (m == Method::MMLT) s.separateDirect = true;  // include direct-pass units in the merge
+    const JobPlan plan = planJob(cornell(), s);
+    const std::vector<PartialResult> parts = runAll(cornell(), plan);
+    PartialResult sequential;
+    for (const PartialResult& p : parts) sequential.add(p);
+    // Groups of 3 (as a worker might return them), then the groups in order; and pairs in reverse order.
+    PartialResult grouped;
+    for (size_t g = 0; g < parts.size(); g += 3) {
+      PartialResult group;
+      for (size_t i = g; i < std::min(parts.size(), g + 3); ++i) group.add(parts[i]);
+      grouped.add(group);
+    }
+    PartialResult reversed;
+    for (size_t i = parts.size(); i-- > 0;) reversed.add(parts[i]);
+    const std::vector<Color> a = developImage(plan, sequential);
+    EXPECT_TRUE(sameBytes(a, developImage(plan, grouped))) << methodName(m);
+    EXPECT_TRUE(sameBytes(a, developImage(plan, reversed))) << methodName(m);
+  }
+}
+
+TEST(MltJob, ReplayMismatchFailsLoudly) {
+  const JobPlan plan = planJob(cornell(), settingsFor(Method::PSSMLT_BDPT, 9));
+  WorkUnit u = plan.units[2];
+  u.startContribution *= 1.01;
+  try {
+    runWorkUnit(cornell(), plan, u);
+    FAIL() << "a wrong start contribution was not detected";
+  } catch (const std::runtime_error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("job seed 9"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("chain 2"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("candidate " + std::to_string(u.startCandidate)), std::string::npos) << msg;
+  }
+}
+
+TEST(MltJob, MmltAllocatesMutationsProportionallyToBk) {
+  RenderSettings s = settingsFor(Method::MMLT, 11);
+  s.chains = 40;
+  const JobPlan plan = planJob(cornell(), s);
+  const Normalization& n = plan.norm;
+  ASSERT_EQ(n.bk.size(), 5u);
+  uint64_t total = 0;
+  for (int k = 1; k <= 4; ++k) {
+    EXPECT_LT(std::fabs(double(n.mutationsPerLength[k]) - double(n.totalMutations) * n.bk[k] / n.b), 1.0) << k;
+    total += n.mutationsPerLength[k];
+    uint64_t unitsTotal = 0;
+    for (const WorkUnit& u : plan.units)
+      if (u.pathLength == k) unitsTotal += u.mutations;
+    EXPECT_EQ(unitsTotal, n.mutationsPerLength[k]) << k;
+  }
+  EXPECT_EQ(total, n.totalMutations);
+  EXPECT_EQ(n.totalMutations, uint64_t(std::llround(8.0 * 16 * 12)));
+}
+
+// Image mean of a render, averaged over `runs` seeds, with its standard error.
+struct MeanSe { double mean, se; };
+MeanSe imageMean(Method m, int chains, int runs, uint64_t seed0) {
+  std::vector<double> means;
+  for (int r = 0; r < runs; ++r) {
+    RenderSettings s = settingsFor(m, seed0 + r);
+    s.chains = chains;
+    s.mutationsPerPixel = 24;
+    const JobPlan plan = planJob(cornell(), s);
+    PartialResult merged;
+    for (const PartialResult& p : runAll(cornell(), plan)) merged.add(p);
+    double sum = 0;
+    for (const Color& c : developImage(plan, merged)) sum += luminance(c);
+    means.push_back(sum / (16 * 12));
+  }
+  double mean = 0, sq = 0;
+  for (double v : means) mean += v;
+  mean /= runs;
+  for (double v : means) sq += (v - mean) * (v - mean);
+  return {mean, std::sqrt(sq / (runs - 1) / runs)};
+}
+
+TEST(MltJob, ManyShortChainsAgreeWithOneLongChain) {
+  // K = 24 chains of M mutations vs 1 chain of 24 M: same expectation. 12 independent runs each; the
+  // difference must be within 4.5 combined standard errors (t with ~22 dof: p ~ 2e-4).
+  const MeanSe many = imageMean(Method::PSSMLT, 24, 12, 100), one = imageMean(Method::PSSMLT, 1, 12, 200);
+  EXPECT_NEAR(many.mean, one.mean, 4.5 * std::hypot(many.se, one.se))
+      << "24 chains: " << many.mean << " +- " << many.se << ", 1 chain: " << one.mean << " +- " << one.se;
+}
+
+}  // namespace
+}  // namespace mlt
