@@ -65,6 +65,12 @@ TEST_F(Cli, MissingSceneIsAnErrorWithExitCode2) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(Cli, UnwritableOutputIsReportedBeforeRendering) {
+  const RunResult r = run("render " + kScenes + "cornell-box.xml --spp 1 -o /nonexistent_dir/x.exr");
+  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_NE(r.output.find("/nonexistent_dir"), std::string::npos) << r.output;
+}
+
 TEST_F(Cli, MalformedSceneNamesFileAndLine) {
   const fs::path scene = tempDir() / "broken.xml";
   std::ofstream(scene) << "<scene version=\"3.0.0\">\n  <shape type=\"teapot_of_doom\"/>\n</scene>\n";

@@ -38,6 +38,12 @@ std::string pngPathFor(const std::string& exrPath) {
 }
 
 LocalRenderResult renderLocal(const LocalRenderOptions& options) {
+  // Fail before rendering, not after, when the output cannot be written.
+  if (!options.outExr.empty()) {
+    const std::filesystem::path dir = std::filesystem::absolute(options.outExr).parent_path();
+    if (!std::filesystem::is_directory(dir))
+      throw std::runtime_error(options.outExr + ": output directory " + dir.string() + " does not exist");
+  }
   // ---- Scene ----------------------------------------------------------------------------------------
   SceneDesc desc = loadMitsubaScene(options.scenePath, options.defines);
   for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
