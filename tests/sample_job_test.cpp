@@ -160,5 +160,32 @@ TEST(JobApi, SplatsAreNormalizedByPixelsOverLightPaths) {
   for (const Color& c : img) EXPECT_GE(c.b, 1.0f - 1e-6f);
 }
 
+TEST(JobApi, TechniqueImagesSumToTheFullImage) {
+  // The stand-in's camera sample is technique (s, t) = (0, 2) and its random splat (1, 1): path length 1.
+  const int w = 12, h = 10;
+  RenderSettings s = settingsFor(Method::BDPT, 5, w, h);
+  const JobPlan plan = planSampleJob(s);
+  const FakeEvaluator eval(w, h);
+  TechniqueFilms techniques(1, w, h);
+  ASSERT_EQ(techniques.films.size(), 2u);
+  PartialResult merged;
+  for (const WorkUnit& u : plan.units) merged.add(runSampleUnit(eval, plan, u, &techniques));
+  const double scale = double(w * h) / double(merged.samples);
+  const std::vector<Color> full = developSampleImage(plan, merged);
+  const std::vector<Color> cam = techniques.films[TechniqueFilms::index(0, 2)].develop(scale);
+  const std::vector<Color> light = techniques.films[TechniqueFilms::index(1, 1)].develop(scale);
+  double lightTotal = 0;
+  for (size_t i = 0; i < full.size(); ++i) {
+    EXPECT_NEAR(cam[i].r + light[i].r, full[i].r, 1e-5f * (1 + full[i].r)) << i;
+    EXPECT_NEAR(cam[i].b + light[i].b, full[i].b, 1e-5f * (1 + full[i].b)) << i;
+    lightTotal += light[i].r;
+  }
+  EXPECT_GT(lightTotal, 0.0);
+  // Running with technique films does not change the main result.
+  PartialResult plain;
+  for (const WorkUnit& u : plan.units) plain.add(runSampleUnit(eval, plan, u));
+  expectBitIdentical(plain.film, merged.film);
+}
+
 }  // namespace
 }  // namespace mlt

@@ -40,6 +40,7 @@ struct TileOutput {
     Color L;
   };
   std::vector<PendingSplat> splats;
+  std::vector<std::pair<int, PendingSplat>> techniqueSplats;  // (technique index, splat)
   uint64_t nonFinite = 0;
 };
 
@@ -67,7 +68,17 @@ JobPlan planSampleJob(const RenderSettings& settings) {
   return plan;
 }
 
+TechniqueFilms::TechniqueFilms(int maxLength_, int width, int height) : maxLength(maxLength_) {
+  if (maxLength < 1) throw std::invalid_argument("technique films: maximum path length must be >= 1");
+  films.assign(size_t(count(maxLength)), Film(width, height));
+}
+
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit) {
+  return runSampleUnit(evaluator, plan, unit, nullptr);
+}
+
+PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
+                            TechniqueFilms* techniques) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   if (isMarkovChainMethod(s.method)) throw std::invalid_argument("runSampleUnit: not a sample-based method");
@@ -97,6 +108,8 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
         const int x1 = std::min(width, x0 + kTileSize), y1 = std::min(height, y0 + kTileSize);
         PathContribution contribution;
         IndependentSource source(0, 0);
+        out.techniqueSplats.clear();
+        std::vector<Color> techniqueL(techniques ? techniques->films.size() : 0);
         for (int y = y0; y < y1; ++y) {
           for (int x = x0; x < x1; ++x) {
             const uint64_t pixelIndex = uint64_t(y) * uint64_t(width) + uint64_t(x);
@@ -108,6 +121,18 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
             for (const Splat& sp : contribution.splats) {
               if (lightTracing || sp.t == 1) out.splats.push_back({sp.pRaster, sp.L});
               else L += sp.L;
+            }
+            if (techniques) {
+              std::fill(techniqueL.begin(), techniqueL.end(), Color());
+              for (const Splat& sp : contribution.splats) {
+                if (sp.s < 0 || sp.t < 1 || sp.s + sp.t - 1 > techniques->maxLength || !sp.L.isFinite()) continue;
+                const int ti = TechniqueFilms::index(sp.s, sp.t);
+                if (sp.t == 1) out.techniqueSplats.push_back({ti, {sp.pRaster, sp.L}});
+                else techniqueL[ti] += sp.L;
+              }
+              if (!lightTracing)
+                for (size_t ti = 0; ti < techniqueL.size(); ++ti)
+                  techniques->films[ti].addSample(Vec2(float(x) + 0.5f, float(y) + 0.5f), techniqueL[ti]);
             }
             if (lightTracing) continue;
             if (!L.isFinite()) {
@@ -123,6 +148,8 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
       for (int tile = groupBegin; tile < groupEnd; ++tile) {
         const TileOutput& out = outputs[tile - groupBegin];
         for (const auto& sp : out.splats) film.addSplat(sp.pRaster, sp.L);
+        if (techniques)
+          for (const auto& [ti, sp] : out.techniqueSplats) techniques->films[ti].addSplat(sp.pRaster, sp.L);
         film.setNonFiniteSamples(film.nonFiniteSamples() + out.nonFinite);
       }
     }

@@ -21,6 +21,21 @@ JobPlan planSampleJob(const RenderSettings& settings);
 PartialResult runSampleUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Same, with a caller-provided evaluator (tests; the farm's worker keeps one per job).
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit);
+// bdpt only: one film per technique (s, t) with path length L = s + t - 1 in [1, maxLength] (longer
+// paths are left out), for inspecting strategies. Each film holds that technique's MIS-weighted
+// contributions: t >= 2 as pixel estimates (every camera sample counted, zeros included, so the
+// technique images sum to the full image), t = 1 as splats; develop each with the same P / N.
+struct TechniqueFilms {
+  int maxLength = 0;
+  std::vector<Film> films;  // index(s, t)
+  TechniqueFilms() = default;
+  TechniqueFilms(int maxLength, int width, int height);
+  static int index(int s, int t) { const int L = s + t - 1; return (L - 1) * (L + 2) / 2 + s; }
+  static int count(int maxLength) { return index(0, maxLength + 2); }  // first index of length maxLength+1
+};
+PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
+                            TechniqueFilms* techniques);
+
 std::vector<Color> developSampleImage(const JobPlan& plan, const PartialResult& merged);
 
 }  // namespace mlt

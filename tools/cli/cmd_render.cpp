@@ -19,7 +19,7 @@ struct RenderCliOptions {
   float largeStep = 0.3f, exposure = 0;
   uint64_t seed = 1;
   std::vector<std::string> defines;
-  bool inProcess = true, quiet = false;
+  bool inProcess = true, quiet = false, techniqueImages = false;
 };
 
 std::map<std::string, std::string> parseDefines(const std::vector<std::string>& defines) {
@@ -84,6 +84,9 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
   sub.add_flag("--in-process,!--farm", o->inProcess,
                "Render in this process (the default for now; the local farm will become the default)");
+  sub.add_flag("--technique-images", o->techniqueImages,
+               "bdpt: also write OUT_s<s>_t<t>.exr/.png, one image per technique (s light vertices, t camera "
+               "vertices), MIS-weighted so that they sum to the full image");
   sub.add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
 
   return [o, spp, maxDepth, rrDepth]() -> int {
@@ -111,6 +114,7 @@ CommandRun setupRender(CLI::App& sub) {
     lo.outPng = o->png;
     lo.exposureStops = o->exposure;
     lo.showProgress = !o->quiet;
+    lo.techniqueImages = o->techniqueImages;
     renderLocal(lo);
     return 0;
   };

@@ -13,7 +13,9 @@
 #include <memory>
 #include <stdexcept>
 
+#include "common/integrators/evaluators.h"
 #include "common/io/png_io.h"
+#include "common/job/sample_job.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
 #include "common/scene/scene_hash.h"
@@ -28,6 +30,28 @@ using Clock = std::chrono::steady_clock;
 // Without --spp, a time-limited pt/lt/bdpt render plans this many samples per pixel in units of one
 // sample each and stops when the time is up.
 constexpr int kTimeOnlySppCap = 1 << 16;
+
+// OUT_s<s>_t<t>.exr (+ .png) for every technique, developed with the full image's splat scale P / N.
+void writeTechniqueImages(const std::string& outExr, const TechniqueFilms& techniques,
+                          const LocalRenderResult& result, float exposureStops) {
+  const std::filesystem::path out(outExr);
+  const double P = double(result.merged.film.pixelCount()), N = double(result.merged.samples);
+  for (int L = 1; L <= techniques.maxLength; ++L) {
+    for (int s = 0; s <= L; ++s) {
+      const int t = L + 1 - s;
+      const Film& film = techniques.films[size_t(TechniqueFilms::index(s, t))];
+      std::filesystem::path path = out;
+      path.replace_filename(out.stem().string() + "_s" + std::to_string(s) + "_t" + std::to_string(t) + ".exr");
+      ImageMetadata m = result.metadata;
+      m.numbers["techniqueS"] = s;
+      m.numbers["techniqueT"] = t;
+      const std::vector<Color> img = film.develop(N > 0 ? P / N : 0.0);
+      writeExr(path.string(), film.width(), film.height(), img, m);
+      path.replace_extension(".png");
+      writePng(path.string(), film.width(), film.height(), img, exposureStops);
+    }
+  }
+}
 
 }  // namespace
 
@@ -83,8 +107,20 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
                                     std::chrono::duration<double>(settings.timeBudgetSeconds));
   size_t nextUnit = 0, merged = 0;
   const RenderScene& sceneRef = *scene;
+  std::unique_ptr<TechniqueFilms> techniques;
+  std::unique_ptr<PathEvaluator> techniqueEvaluator;
+  if (options.techniqueImages) {
+    if (plan.settings.method != Method::BDPT) throw std::invalid_argument("--technique-images needs --method bdpt");
+    const int maxLength = plan.settings.integrator.maxDepth >= 1 ? plan.settings.integrator.maxDepth : 8;
+    techniques = std::make_unique<TechniqueFilms>(maxLength, plan.settings.width, plan.settings.height);
+    techniqueEvaluator = makeEvaluator(sceneRef, Method::BDPT, plan.settings.integrator);
+  }
+  auto runUnit = [&](size_t i) {
+    if (techniques) return runSampleUnit(*techniqueEvaluator, plan, plan.units[i], techniques.get());
+    return runWorkUnit(sceneRef, plan, plan.units[i]);
+  };
   tbb::parallel_pipeline(
-      size_t(2 * threads),
+      techniques ? 1 : size_t(2 * threads),  // technique films are shared: one unit at a time
       tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                      [&](tbb::flow_control& fc) -> size_t {
                                        if (nextUnit >= nUnits || (timed && Clock::now() >= deadline)) {
@@ -95,7 +131,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
                                      }) &
           tbb::make_filter<size_t, std::shared_ptr<PartialResult>>(
               tbb::filter_mode::parallel,
-              [&](size_t i) { return std::make_shared<PartialResult>(runWorkUnit(sceneRef, plan, plan.units[i])); }) &
+              [&](size_t i) { return std::make_shared<PartialResult>(runUnit(i)); }) &
           tbb::make_filter<std::shared_ptr<PartialResult>, void>(tbb::filter_mode::serial_in_order,
                                                                  [&](std::shared_ptr<PartialResult> r) {
                                                                    result.merged.add(*r);
@@ -147,6 +183,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     writeExr(options.outExr, plan.settings.width, plan.settings.height, result.image, m);
     const std::string png = options.outPng.empty() ? pngPathFor(options.outExr) : options.outPng;
     writePng(png, plan.settings.width, plan.settings.height, result.image, options.exposureStops);
+    if (techniques) writeTechniqueImages(options.outExr, *techniques, result, options.exposureStops);
   }
   if (progress) {
     const char* what = chains ? "mutations" : "samples";

@@ -24,6 +24,9 @@ struct LocalRenderOptions {
   std::string outPng;                           // empty: OUT.exr with the extension replaced by .png
   float exposureStops = 0;                      // PNG only
   bool showProgress = true;
+  // bdpt: also write OUT_s<s>_t<t>.exr per technique (path lengths up to max depth, or 8 if unlimited);
+  // the units then run one at a time (each still uses every thread).
+  bool techniqueImages = false;
 };
 
 struct LocalRenderResult {

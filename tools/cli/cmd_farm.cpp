@@ -1,0 +1,159 @@
+// Farm client subcommands: talk to a running mltfarm-coordinator.
+//   mltfarm submit SCENE.xml --coordinator ADDR [render settings] [--priority P] [--path] [--watch] [-o OUT.exr]
+//   mltfarm status JOB --coordinator ADDR       mltfarm jobs --coordinator ADDR
+//   mltfarm watch JOB --coordinator ADDR        mltfarm cancel JOB --coordinator ADDR
+//   mltfarm fetch JOB -o OUT.exr [--png OUT.png] --coordinator ADDR
+// --coordinator defaults to $MLTFARM_COORDINATOR, else 127.0.0.1:50051; --token to $MLTFARM_TOKEN.
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "coordinator/client.h"
+#include "tools/cli/commands.h"
+
+namespace mlt::cli {
+namespace {
+
+using farm::FarmClient;
+using farm::JobStatus;
+
+struct Connection {
+  farm::ChannelOptions channel;
+  void add(CLI::App& sub) {
+    if (const char* a = std::getenv("MLTFARM_COORDINATOR")) channel.address = a;
+    else channel.address = "127.0.0.1:50051";
+    if (const char* t = std::getenv("MLTFARM_TOKEN")) channel.token = t;
+    sub.add_option("--coordinator", channel.address, "Coordinator address HOST:PORT")->capture_default_str();
+    sub.add_option("--token", channel.token, "Shared token (default: $MLTFARM_TOKEN)");
+    sub.add_option("--tls-ca", channel.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
+  }
+};
+
+void printStatus(const JobStatus& s) { std::printf("%s\n", farm::describeStatus(s).c_str()); }
+
+int watchToEnd(FarmClient& client, const std::string& jobId) {
+  JobStatus last = client.watch(jobId, [](const JobStatus& s) {
+    std::fprintf(stderr, "%s\n", farm::describeStatus(s).c_str());
+  });
+  return last.state == farm::JobState::Done ? 0 : kExitError;
+}
+
+// --- submit -----------------------------------------------------------------------------------
+struct SubmitOptions {
+  Connection conn;
+  std::string scene, method = "bdpt", name, out, png;
+  int spp = 16, samplesPerUnit = 0, width = 0, height = 0, maxDepth = 5, rrDepth = 5, chains = 0,
+      bootstrap = 100000, priority = 0;
+  double mutationsPerPixel = 16;
+  float largeStep = 0.3f;
+  uint64_t seed = 1;
+  bool path = false, watch = false;
+};
+
+CommandRun setupSubmit(CLI::App& sub) {
+  auto o = std::make_shared<SubmitOptions>();
+  o->conn.add(sub);
+  sub.add_option("scene", o->scene, "Scene file: uploaded with every file it references")->required();
+  sub.add_option("-m,--method", o->method, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")->capture_default_str();
+  auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel (pt, lt, bdpt)");
+  sub.add_option("--samples-per-unit", o->samplesPerUnit, "pt/lt/bdpt: spp per work unit (0 = automatic)");
+  sub.add_option("--mutations-per-pixel", o->mutationsPerPixel, "Markov chain methods")->capture_default_str();
+  sub.add_option("--chains", o->chains, "Markov chain methods: chains (0 = automatic)");
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap samples")->capture_default_str();
+  sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")->capture_default_str();
+  auto* maxDepth = sub.add_option("--max-depth", o->maxDepth, "Maximum path segments (default: the scene's)");
+  auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's)");
+  sub.add_option("--seed", o->seed, "Job seed")->capture_default_str();
+  auto* width = sub.add_option("--width", o->width, "Film width (default: the scene's)");
+  auto* height = sub.add_option("--height", o->height, "Film height (default: the scene's)");
+  sub.add_option("--priority", o->priority, "Higher runs first; FIFO within a priority")->capture_default_str();
+  sub.add_option("--name", o->name, "Name shown in listings");
+  sub.add_flag("--path", o->path, "Send the scene's path instead of its files (the coordinator must read it)");
+  sub.add_flag("--watch", o->watch, "Follow progress until the job ends");
+  sub.add_option("-o,--output", o->out, "With --watch: fetch the EXR here when done");
+  sub.add_option("--png", o->png, "With --watch: fetch the PNG here when done");
+  return [o, spp, maxDepth, rrDepth, width, height]() -> int {
+    wire::SubmittedSettings s;
+    s.settings.method = parseMethod(o->method);
+    s.settings.seed = o->seed;
+    s.settings.spp = o->spp;
+    s.hasSpp = spp->count() > 0;
+    s.settings.samplesPerUnit = o->samplesPerUnit;
+    s.settings.mutationsPerPixel = o->mutationsPerPixel;
+    s.settings.chains = o->chains;
+    s.settings.bootstrapSamples = o->bootstrap;
+    s.settings.largeStepProb = o->largeStep;
+    s.hasSize = width->count() > 0 || height->count() > 0;
+    s.settings.width = o->width;
+    s.settings.height = o->height;
+    s.hasMaxDepth = maxDepth->count() > 0;
+    s.settings.integrator.maxDepth = o->maxDepth;
+    s.hasRrDepth = rrDepth->count() > 0;
+    s.settings.integrator.rrDepth = o->rrDepth;
+    FarmClient client(o->conn.channel);
+    JobStatus st = client.submit(o->scene, s, o->priority, o->name, o->path);
+    std::printf("%s\n", st.jobId.c_str());
+    std::fflush(stdout);
+    if (!o->watch) return 0;
+    int rc = watchToEnd(client, st.jobId);
+    if (rc == 0 && !o->out.empty()) client.fetch(st.jobId, o->out, "exr");
+    if (rc == 0 && !o->png.empty()) client.fetch(st.jobId, o->png, "png");
+    return rc;
+  };
+}
+
+// --- status / watch / cancel / jobs / fetch ---------------------------------------------------------
+struct JobOptions {
+  Connection conn;
+  std::string job, out, png;
+};
+
+CommandSetup jobCommand(int (*body)(FarmClient&, const JobOptions&), bool needsOutput = false) {
+  return [body, needsOutput](CLI::App& sub) -> CommandRun {
+    auto o = std::make_shared<JobOptions>();
+    o->conn.add(sub);
+    sub.add_option("job", o->job, "Job id (job-N)")->required();
+    if (needsOutput) {
+      sub.add_option("-o,--output", o->out, "Where to write the EXR")->required();
+      sub.add_option("--png", o->png, "Also fetch the PNG preview here");
+    }
+    return [o, body] {
+      FarmClient client(o->conn.channel);
+      return body(client, *o);
+    };
+  };
+}
+
+const CommandRegistration kSubmit("submit", "Submit a render job to a coordinator", setupSubmit);
+const CommandRegistration kStatus("status", "Show a job's state and progress",
+                                  jobCommand([](FarmClient& c, const JobOptions& o) {
+                                    printStatus(c.get(o.job));
+                                    return 0;
+                                  }));
+const CommandRegistration kWatch("watch", "Follow a job's progress until it ends",
+                                 jobCommand([](FarmClient& c, const JobOptions& o) { return watchToEnd(c, o.job); }));
+const CommandRegistration kCancel("cancel", "Cancel a job", jobCommand([](FarmClient& c, const JobOptions& o) {
+                                    printStatus(c.cancel(o.job));
+                                    return 0;
+                                  }));
+const CommandRegistration kFetch("fetch", "Download a finished job's image",
+                                 jobCommand(
+                                     [](FarmClient& c, const JobOptions& o) {
+                                       uint64_t n = c.fetch(o.job, o.out, "exr");
+                                       std::printf("%s: %llu bytes\n", o.out.c_str(), (unsigned long long)n);
+                                       if (!o.png.empty()) c.fetch(o.job, o.png, "png");
+                                       return 0;
+                                     },
+                                     true));
+const CommandRegistration kJobs("jobs", "List a coordinator's jobs", [](CLI::App& sub) -> CommandRun {
+  auto conn = std::make_shared<Connection>();
+  conn->add(sub);
+  return [conn] {
+    FarmClient client(conn->channel);
+    for (const JobStatus& s : client.list()) printStatus(s);
+    return 0;
+  };
+});
+
+}  // namespace
+}  // namespace mlt::cli
