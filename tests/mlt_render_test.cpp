@@ -1,0 +1,149 @@
+// Unbiasedness of the Markov chain methods through the job API (plan -> units -> merge -> develop):
+// pssmlt, pssmlt-bdpt and mmlt (plus Kelemen's MIS splatting and separateDirect) against bdpt on a small
+// Cornell box (image mean and 3x3 tile means, luminance), and against the analytic radiance of the
+// furnace sphere.
+//
+// Tolerance: each MLT configuration is rendered with R independent job seeds (bootstrap included, so
+// the spread contains b's error); its standard error is the spread of the R runs / sqrt(R). bdpt's
+// comes from its batch spread. The largest z = |difference| / combined standard error over the 10
+// entries must stay below kZ: with t(R-1 = 15 dof) tails, P(|t| > 5) ~ 1.6e-4 per entry, ~1% over
+// the ~60 entries in this file.
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "common/integrators/evaluators.h"
+#include "common/job/render_job.h"
+#include "common/render/render_scene.h"
+#include "tests/support/estimates.h"
+#include "tests/support/test_scenes.h"
+
+namespace mlt {
+namespace {
+
+constexpr int kRuns = 16;
+constexpr double kZ = 5.0;
+constexpr int kW = 24, kH = 18, kTiles = 3;
+
+const RenderScene& cornell() {
+  static const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(kW, kH));
+  return *scene;
+}
+
+// Image mean and tile means (as test::estimateImage) of developed images over kRuns seeds.
+test::ImageStats mltStats(const RenderScene& scene, RenderSettings s, int w, int h) {
+  std::vector<std::vector<double>> runs;
+  for (int r = 0; r < kRuns; ++r) {
+    s.seed = 1000 + r;
+    const JobPlan plan = planJob(scene, s);
+    std::vector<PartialResult> parts(plan.units.size());
+    tbb::parallel_for(size_t(0), parts.size(), [&](size_t i) { parts[i] = runWorkUnit(scene, plan, plan.units[i]); });
+    PartialResult merged;
+    for (const PartialResult& p : parts) merged.add(p);
+    const std::vector<Color> img = developImage(plan, merged);
+    std::vector<double> v(1 + kTiles * kTiles, 0.0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double L = luminance(img[size_t(y) * w + x]);
+        v[0] += L / (w * h);
+        v[1 + (y * kTiles / h) * kTiles + x * kTiles / w] += L * kTiles * kTiles / (w * h);
+      }
+    runs.push_back(v);
+  }
+  test::ImageStats st;
+  st.tilesX = st.tilesY = kTiles;
+  st.n = kRuns;
+  const size_t K = runs[0].size();
+  st.mean.assign(K, 0);
+  st.stdErr.assign(K, 0);
+  for (size_t k = 0; k < K; ++k) {
+    double m = 0, sq = 0;
+    for (const auto& v : runs) m += v[k];
+    m /= kRuns;
+    for (const auto& v : runs) sq += (v[k] - m) * (v[k] - m);
+    st.mean[k] = m;
+    st.stdErr[k] = std::sqrt(sq / (kRuns - 1) / kRuns);
+  }
+  return st;
+}
+
+const test::ImageStats& bdptReference() {
+  static const test::ImageStats ref = [] {
+    IntegratorSettings is;
+    is.maxDepth = 5;
+    const BdptEvaluator bdpt(cornell(), is);
+    return test::estimateImage(bdpt, kW, kH, 4242, uint64_t(kW) * kH * 2048, kTiles, kTiles);
+  }();
+  return ref;
+}
+
+RenderSettings cornellSettings(Method m) {
+  RenderSettings s;
+  s.method = m;
+  s.integrator.maxDepth = 5;
+  s.mutationsPerPixel = 32;
+  s.bootstrapSamples = 80000;  // b's error (~2% per run here: the visible light) dominates the image mean
+  s.chains = 16;
+  return s;
+}
+
+void expectAgreesWithBdpt(const RenderSettings& s, const char* label) {
+  const test::ImageStats mlt = mltStats(cornell(), s, kW, kH);
+  const test::ImageStats& ref = bdptReference();
+  int where = 0;
+  const double z = test::maxZ(mlt, ref, &where);
+  EXPECT_LT(z, kZ) << label << ": entry " << where << " (0 = image mean) mlt " << mlt.mean[where] << " +- "
+                   << mlt.stdErr[where] << " vs bdpt " << ref.mean[where] << " +- " << ref.stdErr[where];
+  std::printf("%s: image mean %.5f +- %.5f, bdpt %.5f +- %.5f, max z %.2f\n", label, mlt.mean[0], mlt.stdErr[0], ref.mean[0], ref.stdErr[0], z);
+  // %.5f +- %.5f, bdpt %.5f +- %.5f\n", label, mlt.mean[0], mlt.stdErr[0], ref.mean[0], ref.stdErr[0]);
+  // The comparison must be able to fail: a 6% brightness error would exceed kZ on the image mean.
+  EXPECT_LT(kZ * std::hypot(mlt.stdErr[0], ref.stdErr[0]), 0.06 * ref.mean[0]) << label << ": test too weak";
+}
+
+TEST(MltRender, PssmltAgreesWithBdpt) { expectAgreesWithBdpt(cornellSettings(Method::PSSMLT), "pssmlt"); }
+
+TEST(MltRender, PssmltBdptAgreesWithBdpt) {
+  expectAgreesWithBdpt(cornellSettings(Method::PSSMLT_BDPT), "pssmlt-bdpt");
+}
+
+TEST(MltRender, MmltAgreesWithBdpt) { expectAgreesWithBdpt(cornellSettings(Method::MMLT), "mmlt"); }
+
+TEST(MltRender, KelemenMisSplattingAgreesWithBdpt) {
+  RenderSettings s = cornellSettings(Method::PSSMLT_BDPT);
+  s.splatting = MltSplatting::KelemenMIS;
+  s.kernel = MutationKernel::Gaussian;
+  s.largeStepProb = 0.5f;
+  expectAgreesWithBdpt(s, "pssmlt-bdpt, Kelemen MIS, Gaussian kernel");
+}
+
+TEST(MltRender, SeparateDirectAgreesWithBdpt) {
+  RenderSettings s = cornellSettings(Method::MMLT);
+  s.separateDirect = true;
+  s.spp = 64;  // the direct pass (same seeds in every run would share its noise otherwise)
+  expectAgreesWithBdpt(s, "mmlt, direct by bdpt");
+}
+
+TEST(MltRender, FurnaceSphereMatchesAnalyticRadiance) {
+  const float Le = 1.0f, rho = 0.5f;
+  const int maxDepth = 4;
+  const auto scene = RenderScene::build(test::furnaceSphere(Le, rho, 8, 8, 8));
+  const double expected = luminance(Color(float(test::furnaceRadiance(Le, rho, maxDepth))));
+  for (Method m : {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT}) {
+    RenderSettings s;
+    s.method = m;
+    s.integrator.maxDepth = maxDepth;
+    s.mutationsPerPixel = 256;
+    s.bootstrapSamples = 5000;
+    s.chains = 8;
+    const test::ImageStats st = mltStats(*scene, s, 8, 8);
+    EXPECT_LT(std::fabs(st.mean[0] - expected), kZ * st.stdErr[0] + 1e-4 * expected)
+        << methodName(m) << ": " << st.mean[0] << " +- " << st.stdErr[0] << " vs analytic " << expected;
+  }
+}
+
+}  // namespace
+}  // namespace mlt
