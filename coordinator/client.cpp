@@ -81,13 +81,11 @@ FarmClient::FarmClient(ChannelOptions options)
     : opt_(std::move(options)), channel_(makeChannel(opt_)), stub_(v1::Coordinator::NewStub(channel_)) {}
 FarmClient::~FarmClient() = default;
 
-JobStatus FarmClient::submit(const std::string& sceneFile, const RenderSettings& settings, bool hasSize,
-                             bool hasMaxDepth, bool hasRrDepth, int priority, const std::string& name,
-                             bool coordinatorPath) {
+JobStatus FarmClient::submit(const std::string& sceneFile, const wire::SubmittedSettings& settings, int priority,
+                             const std::string& name, bool coordinatorPath) {
   if (!coordinatorPath) {
     SceneBundle b = collectBundle(sceneFile);
-    return submitBundle(b.files, b.sceneFile, settings, hasSize, hasMaxDepth, hasRrDepth, priority,
-                        name.empty() ? sceneFile : name);
+    return submitBundle(b.files, b.sceneFile, settings, priority, name.empty() ? sceneFile : name);
   }
   grpc::ClientContext ctx;
   prepareContext(ctx, opt_, kSubmitDeadline);
@@ -96,7 +94,7 @@ JobStatus FarmClient::submit(const std::string& sceneFile, const RenderSettings&
   v1::SubmitJobRequest req;
   auto* h = req.mutable_header();
   h->set_format_version(wire::kFormatVersion);
-  *h->mutable_settings() = wire::toProto(settings, hasSize, hasMaxDepth, hasRrDepth);
+  *h->mutable_settings() = wire::toProto(settings);
   h->set_priority(priority);
   h->set_name(name.empty() ? sceneFile : name);
   h->set_coordinator_path(std::filesystem::absolute(sceneFile).string());
@@ -108,8 +106,7 @@ JobStatus FarmClient::submit(const std::string& sceneFile, const RenderSettings&
 }
 
 JobStatus FarmClient::submitBundle(const std::vector<BundleFile>& files, const std::string& sceneFile,
-                                   const RenderSettings& settings, bool hasSize, bool hasMaxDepth, bool hasRrDepth,
-                                   int priority, const std::string& name) {
+                                   const wire::SubmittedSettings& settings, int priority, const std::string& name) {
   grpc::ClientContext ctx;
   prepareContext(ctx, opt_, kSubmitDeadline);
   v1::SubmitJobResponse resp;
@@ -117,7 +114,7 @@ JobStatus FarmClient::submitBundle(const std::vector<BundleFile>& files, const s
   v1::SubmitJobRequest req;
   auto* h = req.mutable_header();
   h->set_format_version(wire::kFormatVersion);
-  *h->mutable_settings() = wire::toProto(settings, hasSize, hasMaxDepth, hasRrDepth);
+  *h->mutable_settings() = wire::toProto(settings);
   h->set_priority(priority);
   h->set_name(name);
   h->set_bundle_scene_file(sceneFile);

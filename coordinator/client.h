@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "coordinator/farm_types.h"
+#include "proto/convert.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 
@@ -44,12 +45,11 @@ class FarmClient {
 
   // Submits a scene as a bundle (read and hashed locally) or, with coordinatorPath = true, as a path the
   // coordinator reads itself.
-  JobStatus submit(const std::string& sceneFile, const RenderSettings& settings, bool hasSize, bool hasMaxDepth,
-                   bool hasRrDepth, int priority = 0, const std::string& name = "", bool coordinatorPath = false);
+  JobStatus submit(const std::string& sceneFile, const wire::SubmittedSettings& settings, int priority = 0,
+                   const std::string& name = "", bool coordinatorPath = false);
   // Submit with an explicit bundle (tests: malformed scenes, missing files).
   JobStatus submitBundle(const std::vector<BundleFile>& files, const std::string& sceneFile,
-                         const RenderSettings& settings, bool hasSize, bool hasMaxDepth, bool hasRrDepth,
-                         int priority = 0, const std::string& name = "");
+                         const wire::SubmittedSettings& settings, int priority = 0, const std::string& name = "");
   JobStatus get(const std::string& jobId);
   JobStatus cancel(const std::string& jobId);
   std::vector<JobStatus> list();

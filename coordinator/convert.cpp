@@ -94,6 +94,7 @@ SubmitRequest fromProto(const v1::SubmitHeader& h, std::vector<BundleFile> files
   r.hasSize = s.hasSize;
   r.hasMaxDepth = s.hasMaxDepth;
   r.hasRrDepth = s.hasRrDepth;
+  r.hasSpp = s.hasSpp;
   if (h.priority() < -1000 || h.priority() > 1000)
     throw wire::WireError("priority", std::to_string(h.priority()) + " is out of range [-1000, 1000]");
   r.priority = h.priority();

@@ -238,7 +238,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   // 2. Load and validate the scene exactly as the workers will.
   SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string());
   RenderSettings s = req.settings;
-  resolveSettings(s, req.hasSize, req.hasMaxDepth, req.hasRrDepth, desc);
+  resolveSettings(s, req.hasSize, req.hasMaxDepth, req.hasRrDepth, req.hasSpp, desc);
   const double pixels = double(s.width) * s.height;
   if (isMarkovChainMethod(s.method) && s.mutationsPerPixel * pixels > kMaxTotalWork)
     throw FarmError(Code::InvalidArgument,
@@ -255,7 +255,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   rec.name = req.name;
   rec.priority = req.priority;
   rec.state = int(JobState::Queued);
-  rec.settings = wire::toProto(s, true, true, true).SerializeAsString();
+  rec.settings = wire::toProto(s).SerializeAsString();
   rec.sceneHash = hash;
   rec.sceneFile = bundle.sceneFile;
   rec.submittedAt = unixNow();

@@ -3,6 +3,7 @@
 // Prints "listening on HOST:PORT" on stdout once serving (scripts and tests read the port from it when
 // --listen ends in :0). SIGINT/SIGTERM shut down gracefully; everything accepted is already on disk.
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
   app.add_flag("--keep-partials", opt.keepPartials, "also write each accepted task as a partial EXR");
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ coordinator %v");
 

@@ -54,7 +54,7 @@ struct BundleFile {
 
 struct SubmitRequest {
   RenderSettings settings;
-  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false;
+  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false, hasSpp = false;
   int priority = 0;
   std::string name;
   // Either a bundle (sceneFile is its path inside the bundle) or a coordinator-readable path.

@@ -115,9 +115,7 @@ void writePartialExr(const std::string& path, const JobIdentity& id, const JobPl
   m.strings["farm.sceneHash"] = id.sceneHash;
   m.strings["farm.method"] = methodName(plan.settings.method);
   m.strings["farm.plan"] = toHex(wire::jobPlanBytes(plan));
-  PartialResult header = result;
-  header.film = Film();  // the raw sums are the EXR's channels
-  m.strings["farm.partial"] = toHex(wire::serializePartial(header));
+  m.strings["farm.partial"] = toHex(wire::partialHeaderBytes(result));  // the raw sums are the EXR's channels
   m.strings["farm.unitList"] = unitList(result.units);
   m.numbers["farm.b"] = plan.norm.b;
   for (size_t k = 0; k < plan.norm.bk.size(); ++k) m.numbers[fmt::format("farm.b{}", k)] = plan.norm.bk[k];
@@ -150,11 +148,10 @@ PartialExr readPartialExr(const std::string& path) {
   try {
     p.planBytes = fromHex(str("farm.plan"), path);
     p.plan = wire::parseJobPlan(p.planBytes);
-    p.result = wire::parsePartial(fromHex(str("farm.partial"), path));
+    p.result = wire::partialFromHeaderBytes(fromHex(str("farm.partial"), path), std::move(f.film));
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(fmt::format("{}: corrupt farm metadata: {}", path, e.what()));
   }
-  p.result.film = std::move(f.film);
   p.task = uint32_t(num("farm.task"));
   p.tasks = uint32_t(num("farm.tasks"));
   if (p.result.film.width() != p.plan.settings.width || p.result.film.height() != p.plan.settings.height)

@@ -14,7 +14,9 @@ SceneDesc loadSceneDesc(const std::string& path) {
   }
 }
 
-void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, const SceneDesc& desc) {
+void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, bool hasSpp,
+                     const SceneDesc& desc) {
+  if (!hasSpp && desc.sampleCount) s.spp = *desc.sampleCount;
   if (!hasSize) {
     s.width = desc.camera.width;
     s.height = desc.camera.height;

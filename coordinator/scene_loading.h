@@ -13,7 +13,8 @@ namespace mlt::farm {
 // loadMitsubaScene; errors become FarmError(InvalidArgument) carrying the loader's message.
 SceneDesc loadSceneDesc(const std::string& path);
 // Fills what the client left to the scene: film size, max depth, rr depth.
-void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, const SceneDesc& desc);
+void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, bool hasSpp,
+                     const SceneDesc& desc);
 // Builds the render scene for a film of width x height (the camera's raster follows the job's size).
 std::unique_ptr<RenderScene> buildRenderScene(SceneDesc desc, int width, int height);
 

@@ -51,8 +51,13 @@ void checkVersion(uint32_t version, const char* message) {
 // ---------------------------------------------------------------------------------------------
 // Settings
 // ---------------------------------------------------------------------------------------------
-v1::RenderSettings toProto(const RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth) {
+v1::RenderSettings toProto(const RenderSettings& s) { return toProto(SubmittedSettings{s, true, true, true, true}); }
+
+v1::RenderSettings toProto(const SubmittedSettings& sub) {
+  const RenderSettings& s = sub.settings;
+  const bool hasSize = sub.hasSize, hasMaxDepth = sub.hasMaxDepth, hasRrDepth = sub.hasRrDepth;
   v1::RenderSettings p;
+  p.set_has_spp(sub.hasSpp);
   p.set_method(methodName(s.method));
   p.set_seed(s.seed);
   p.set_width(s.width);
@@ -88,6 +93,7 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
   }
   s.seed = p.seed();
   out.hasSize = p.has_size();
+  out.hasSpp = p.has_spp();
   if (p.has_size()) {
     requireRange("settings.width", p.width(), 1, kMaxFilmSide);
     requireRange("settings.height", p.height(), 1, kMaxFilmSide);
@@ -143,7 +149,7 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
 v1::JobPlan toProto(const JobPlan& plan) {
   v1::JobPlan p;
   p.set_format_version(kFormatVersion);
-  *p.mutable_settings() = toProto(plan.settings, true, true, true);
+  *p.mutable_settings() = toProto(plan.settings);
   auto* n = p.mutable_norm();
   n->set_b(plan.norm.b);
   n->set_b_std_err(plan.norm.bStdErr);
@@ -280,6 +286,24 @@ PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes
   checkVersion(h.format_version(), "PartialHeader");
   PartialResult r;
   r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite());
+  r.samples = h.samples();
+  r.stats = fromProto(h.stats());
+  r.units.assign(h.units().begin(), h.units().end());
+  r.seconds = h.seconds();
+  return r;
+}
+
+std::string partialHeaderBytes(const PartialResult& r) { return deterministicBytes(partialHeader(r)); }
+
+PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film) {
+  v1::PartialHeader h;
+  if (!h.ParseFromString(headerBytes)) throw WireError("partial", "unparsable header");
+  checkVersion(h.format_version(), "PartialHeader");
+  if (h.width() != film.width() || h.height() != film.height())
+    throw WireError("partial.width", fmt::format("header says {}x{}, the film is {}x{}", h.width(), h.height(),
+                                                 film.width(), film.height()));
+  PartialResult r;
+  r.film = std::move(film);
   r.samples = h.samples();
   r.stats = fromProto(h.stats());
   r.units.assign(h.units().begin(), h.units().end());

@@ -37,9 +37,11 @@ void checkVersion(uint32_t version, const char* message);
 // Settings as submitted: which optional fields the client set.
 struct SubmittedSettings {
   RenderSettings settings;
-  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false;
+  bool hasSize = false, hasMaxDepth = false, hasRrDepth = false, hasSpp = false;
 };
-v1::RenderSettings toProto(const RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth);
+v1::RenderSettings toProto(const SubmittedSettings& s);
+// Fully resolved settings (every flag set).
+v1::RenderSettings toProto(const RenderSettings& s);
 SubmittedSettings fromProto(const v1::RenderSettings& p);  // validates ranges
 
 v1::JobPlan toProto(const JobPlan& plan);
@@ -56,6 +58,9 @@ std::string encodeFilm(const Film& film);
 Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite);
 size_t filmByteSize(int width, int height);
 PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes);  // validates
+// The header alone as bytes (partial EXR metadata) and back, with the film supplied separately.
+std::string partialHeaderBytes(const PartialResult& r);
+PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film);  // validates the size
 
 // Whole PartialResult as one blob (header length + header + film bytes): the coordinator's database
 // and the partial EXR metadata use it.

@@ -173,6 +173,8 @@ void Worker::runTask(Active* a) {
   try {
     auto plan = planFor(l.jobId);
     auto scene = sceneFor(l, *plan);
+    for (int slept = 0; slept < opt_.taskDelayMs && !a->cancel; slept += 10)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     const auto t0 = std::chrono::steady_clock::now();
     PartialResult result;
     if (!farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel)) {

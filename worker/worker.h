@@ -26,6 +26,7 @@ struct WorkerOptions {
   int threads = 0;          // parallel tasks; 0 = hardware concurrency
   std::string cacheDir;     // scene bundles by hash; default $TMPDIR/mltfarm-worker-cache
   bool drain = false;       // on stop: finish the tasks in hand instead of returning them
+  int taskDelayMs = 0;      // tests only: hold each lease this long before running it
 };
 
 class Worker {

@@ -2,6 +2,7 @@
 //   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -27,8 +28,11 @@ int main(int argc, char** argv) {
   app.add_option("--tls-ca", opt.coordinator.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
   app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
   app.add_flag("--drain", opt.drain, "on SIGTERM finish the tasks in hand instead of returning them");
+  app.add_option("--debug-task-delay-ms", opt.taskDelayMs, "tests: hold each lease this long before running it")
+      ->group("");  // hidden
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");
   try {

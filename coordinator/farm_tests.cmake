@@ -1,0 +1,13 @@
+# Links the farm's tests (tests/farm_*_test.cpp) and benchmark (tests/bench/farm_bench.cpp) with the farm
+# libraries and makes them depend on the executables they start. Included from the top-level
+# CMakeLists.txt after tests/ (the targets are created there by the generic per-file loop).
+file(GLOB MLTFARM_FARM_TESTS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/farm_*_test.cpp
+     ${PROJECT_SOURCE_DIR}/tests/bench/farm_*_bench.cpp)
+foreach(src ${MLTFARM_FARM_TESTS})
+  get_filename_component(name ${src} NAME_WE)
+  if(TARGET ${name})
+    target_link_libraries(${name} PRIVATE mltfarm_worker)
+    add_dependencies(${name} mltfarm mltfarm-coordinator mltfarm-worker)
+    target_compile_definitions(${name} PRIVATE MLTFARM_TOOLS_DIR="${CMAKE_BINARY_DIR}/tools")
+  endif()
+endforeach()

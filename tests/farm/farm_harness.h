@@ -1,0 +1,135 @@
+// Shared helpers of the farm tests: real coordinator and worker processes on loopback (ephemeral
+// ports), a temporary directory per test, byte comparison of files.
+#pragma once
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "coordinator/client.h"
+#include "coordinator/process.h"
+
+namespace mlt::farm::test {
+
+namespace fs = std::filesystem;
+
+inline std::string toolsDir() { return MLTFARM_TOOLS_DIR; }
+inline std::string cornellBox() { return std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml"; }
+
+inline std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline size_t countOccurrences(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+// A fresh directory under the system temp dir, removed at the end unless the test failed.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "mltfarm-test-XXXXXX").string();
+    path = mkdtemp(tmpl.data());
+  }
+  ~TempDir() {
+    if (!::testing::Test::HasFailure()) fs::remove_all(path);
+    else std::fprintf(stderr, "farm test: logs kept in %s\n", path.c_str());
+  }
+  std::string operator/(const std::string& name) const { return path + "/" + name; }
+};
+
+struct Farm {
+  TempDir dir;
+  std::string stateDir = dir / "state";
+  std::unique_ptr<CoordinatorProcess> coordinator;
+  std::vector<std::unique_ptr<ChildProcess>> workers;
+  std::string token;
+  int restarts = 0;
+
+  void startCoordinator(std::vector<std::string> extra = {}, const std::string& listen = "") {
+    std::vector<std::string> args{"--state-dir", stateDir, "--heartbeat", "0.2", "--lease-timeout", "1.5"};
+    if (!token.empty()) args.insert(args.end(), {"--token", token});
+    args.insert(args.end(), extra.begin(), extra.end());
+    const std::string log = dir / ("coordinator-" + std::to_string(restarts++) + ".log");
+    if (listen.empty()) {
+      coordinator = std::make_unique<CoordinatorProcess>(startCoordinatorProcess(toolsDir() + "/mltfarm-coordinator", args, log));
+    } else {  // a fixed address (restart on the same port)
+      std::vector<std::string> argv{toolsDir() + "/mltfarm-coordinator", "--listen", listen};
+      argv.insert(argv.end(), args.begin(), args.end());
+      auto c = std::make_unique<CoordinatorProcess>();
+      c->process = ChildProcess(argv, log, true);
+      auto line = c->process.readLine(std::chrono::seconds(30));
+      ASSERT_TRUE(line && line->rfind("listening on ", 0) == 0) << "coordinator did not restart, see " << log;
+      c->address = line->substr(13);
+      coordinator = std::move(c);
+    }
+  }
+  ChildProcess& startWorker(int threads = 1, std::vector<std::string> extra = {}) {
+    std::vector<std::string> argv{toolsDir() + "/mltfarm-worker", "--coordinator", coordinator->address, "--threads",
+                                  std::to_string(threads), "--cache-dir", dir / "cache"};
+    if (!token.empty()) argv.insert(argv.end(), {"--token", token});
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    workers.push_back(std::make_unique<ChildProcess>(argv, dir / ("worker-" + std::to_string(workers.size()) + ".log"), false));
+    return *workers.back();
+  }
+  FarmClient client(const std::string& tok = "\x01") const {
+    return FarmClient({coordinator->address, tok == "\x01" ? token : tok, ""});
+  }
+  // Waits until `pred(status)` or the job is terminal; returns the last status.
+  template <class Pred>
+  JobStatus waitFor(const std::string& jobId, Pred pred, std::chrono::seconds timeout = std::chrono::seconds(120)) {
+    auto c = client();
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    JobStatus s;
+    while (std::chrono::steady_clock::now() < end) {
+      try {
+        s = c.get(jobId);
+        if (pred(s) || isTerminal(s.state)) return s;
+      } catch (const RpcError&) {
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    ADD_FAILURE() << "timed out waiting for " << jobId << ": " << describeStatus(s);
+    return s;
+  }
+  JobStatus waitDone(const std::string& jobId) {
+    return waitFor(jobId, [](const JobStatus&) { return false; });
+  }
+  ~Farm() {
+    for (auto& w : workers) w->terminate(std::chrono::seconds(10));
+    if (coordinator) coordinator->process.terminate(std::chrono::seconds(10));
+  }
+};
+
+// Small, fast settings: 32x32, few mutations, fixed seed.
+inline wire::SubmittedSettings tinySettings(Method method) {
+  wire::SubmittedSettings s;
+  s.settings.method = method;
+  s.settings.seed = 7;
+  s.settings.width = s.settings.height = 32;
+  s.hasSize = true;
+  s.settings.spp = 8;
+  s.hasSpp = true;
+  s.settings.samplesPerUnit = 1;
+  s.settings.mutationsPerPixel = 8;
+  s.settings.chains = 24;
+  s.settings.bootstrapSamples = 4000;
+  s.settings.integrator.maxDepth = 4;
+  s.hasMaxDepth = true;
+  return s;
+}
+
+}  // namespace mlt::farm::test
