@@ -37,20 +37,19 @@ double quantize(double v, uint64_t key) {
 
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
   const uint64_t base = hashKeys(jobSeed, unitIndex, 0x71756e74ULL);
-  auto& splats = film.splatSums();
-  for (size_t i = 0; i < splats.size(); ++i) {
-    const uint64_t k = hashKeys(base, i);
-    splats[i].r = quantize(splats[i].r, k + 1);
-    splats[i].g = quantize(splats[i].g, k + 2);
-    splats[i].b = quantize(splats[i].b, k + 3);
-  }
-  auto& pixels = film.pixelSums();
-  for (size_t i = 0; i < pixels.size(); ++i) {
-    const uint64_t k = hashKeys(base, i, 1);
-    pixels[i].r = quantize(pixels[i].r, k + 1);
-    pixels[i].g = quantize(pixels[i].g, k + 2);
-    pixels[i].b = quantize(pixels[i].b, k + 3);
-  }
+  // Zero entries (most of a chain's film) stay zero and cost no hashing.
+  auto quantizeBuffer = [base](std::vector<RGBd>& buffer, uint64_t which) {
+    for (size_t i = 0; i < buffer.size(); ++i) {
+      RGBd& v = buffer[i];
+      if (v.r == 0 && v.g == 0 && v.b == 0) continue;
+      const uint64_t k = hashKeys(base, i, which);
+      v.r = quantize(v.r, k + 1);
+      v.g = quantize(v.g, k + 2);
+      v.b = quantize(v.b, k + 3);
+    }
+  };
+  quantizeBuffer(film.splatSums(), 0);
+  quantizeBuffer(film.pixelSums(), 1);
 }
 
 }  // namespace mlt

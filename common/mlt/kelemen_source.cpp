@@ -61,6 +61,8 @@ KelemenSource::KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint
   if (params.kernel == SmallStepKernel::Gaussian && !(params.sigma > 0))
     throw std::invalid_argument("KelemenSource: Gaussian sigma must be > 0 (got " + std::to_string(params.sigma) + ")");
   logRatio_ = std::log(params.s2 / params.s1);
+  for (int i = 0; i <= kStepTable; ++i)
+    stepTable_[i] = float(double(params.s2) * std::exp(-double(logRatio_) * i / kStepTable));
   uniformAfter_ = params.kernel == SmallStepKernel::Kelemen ? exponentialUniformAfter(params.s1, params.s2) : 0;
   for (auto& v : coords_) v.reserve(128);
   touched_.reserve(256);
@@ -133,8 +135,13 @@ float KelemenSource::mutate(float v, int64_t n) {
   if (n >= uniformAfter_) return rng_.uniform();
   for (int64_t i = 0; i < n; ++i) {
     // Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
-    const float dv = params_.s2 * std::exp(-logRatio_ * rng_.uniform());
-    if (rng_.uniform() < 0.5f) {
+    // One 32-bit draw: bit 31 is the sign, the low 24 bits are U (table index + interpolation weight).
+    const uint32_t bits = rng_.nextU32();
+    const uint32_t u24 = bits & 0xffffffu;
+    const uint32_t idx = u24 >> 14;  // 10 bits: kStepTable = 1024
+    const float frac = float(u24 & 0x3fffu) * (1.0f / 16384.0f);
+    const float dv = stepTable_[idx] + frac * (stepTable_[idx + 1] - stepTable_[idx]);
+    if (bits & 0x80000000u) {
       v += dv;
       if (v >= 1) v -= 1;
     } else {

@@ -99,6 +99,10 @@ class KelemenSource final : public SampleSource {
   bool largeStep_ = false;
   int stream_ = 0, next_ = 0;
   float logRatio_;          // log(s2 / s1)
+  // Exponential kernel: |dv|(u) = s2 exp(-log(s2/s1) u) tabulated at u = i / kStepTable, linearly
+  // interpolated (relative error < 1e-6; the kernel stays symmetric, so the chain stays exact).
+  static constexpr int kStepTable = 1024;
+  float stepTable_[kStepTable + 1];
   int64_t uniformAfter_;    // exponential kernel: after this many steps the offset is uniform to 2^-30
 };
 
