@@ -233,11 +233,11 @@ uint64_t FarmClient::fetch(const std::string& jobId, const std::string& path, co
 bool FarmClient::healthy(std::chrono::milliseconds deadline) {
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + deadline);
-  grpc::ByteBuffer unused;
   // grpc.health.v1.Health/Check with an empty HealthCheckRequest (service "" = the whole server):
   // the generic stub avoids generating health.proto ourselves.
   grpc::GenericStub generic(channel_);
-  grpc::ByteBuffer request;  // empty message
+  grpc::Slice emptySlice(std::string{});
+  grpc::ByteBuffer request(&emptySlice, 1);  // the empty message
   grpc::ByteBuffer response;
   grpc::Status status;
   std::mutex m;
