@@ -1,8 +1,6 @@
 // Primary-sample-space pieces for the chain loop (chain.h): the state is a KelemenSource, the target runs
 // a PathEvaluator on it, the sink splats into a Film.
 #pragma once
-#include <functional>
-
 #include "common/film/film.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/chain.h"
@@ -22,22 +20,15 @@ class PssState final : public ChainState {
 };
 
 // Evaluates a path evaluator on a sample source (the film position comes from the camera stream).
-// An optional filter drops splats before the target value is computed (separateDirect: the chains carry
-// only the paths the direct pass does not).
+// (The job uses MethodTarget, method_target.h; this is the minimal adapter for custom evaluators.)
 class EvaluatorTarget final : public ChainTarget {
  public:
-  using SplatFilter = bool (*)(const Splat&);
-  EvaluatorTarget(const PathEvaluator& evaluator, SampleSource& source, SplatFilter keep = nullptr)
-      : evaluator_(evaluator), source_(source), keep_(keep) {}
-  void evaluate(PathContribution& out) override {
-    evaluator_.evaluate(source_, nullptr, out);
-    if (keep_) std::erase_if(out.splats, [this](const Splat& s) { return !keep_(s); });
-  }
+  EvaluatorTarget(const PathEvaluator& evaluator, SampleSource& source) : evaluator_(evaluator), source_(source) {}
+  void evaluate(PathContribution& out) override { evaluator_.evaluate(source_, nullptr, out); }
 
  private:
   const PathEvaluator& evaluator_;
   SampleSource& source_;
-  SplatFilter keep_;
 };
 
 // Splats into a film's splat buffer; `scale` multiplies every weight (mmlt's r_k, develop.h (D2)).
