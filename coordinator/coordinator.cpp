@@ -478,7 +478,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
       touch(job);
     }
     plan = job.plan;
-    identity = {job.status.jobId, job.rec.sceneHash};
+    identity = {job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
   }
   if (opt_.keepPartials) {
     fs::path dir = fs::path(jobDir(parseJobId(jobId))) / "partials";
@@ -586,7 +586,7 @@ void Coordinator::merge(int64_t id) {
     std::lock_guard lock(mu_);
     Job& job = jobs_.at(id);
     plan = job.plan;
-    identity = {job.status.jobId, job.rec.sceneHash};
+    identity = {job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
     tasks = job.tasks.size();
   }
   std::string error;

@@ -86,17 +86,39 @@ double previewSplatScale(const JobPlan& plan) {
 }
 
 ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const PartialResult& merged) {
+  // The keys of `mltfarm render --in-process` (tools/cli/render_local.cpp), minus wall-clock values that
+  // would make the bytes depend on the run, plus the farm's own.
   ImageMetadata m;
+  const bool chains = isMarkovChainMethod(plan.settings.method);
+  const double pixels = double(plan.settings.width) * plan.settings.height;
+  m.strings["software"] = "mltfarm";
+  m.strings["method"] = methodName(plan.settings.method);
+  m.strings["scene"] = id.scene;
+  m.strings["sceneHash"] = id.sceneHash;
+  m.strings["seed"] = std::to_string(plan.settings.seed);  // a string: 64-bit seeds do not fit a double
+  m.numbers["width"] = plan.settings.width;
+  m.numbers["height"] = plan.settings.height;
+  m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
+  m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
+  m.numbers["workUnits"] = double(merged.units.size());
+  m.numbers["workUnitsPlanned"] = double(plan.units.size());
+  m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());
+  if (chains) {
+    m.numbers["mutations"] = double(merged.samples);
+    m.numbers["mutationsPerPixel"] = double(merged.samples) / pixels;
+    m.numbers["chains"] = double(merged.units.size());
+    m.numbers["b"] = plan.norm.b;
+    m.numbers["bStdErr"] = plan.norm.bStdErr;
+    m.numbers["bootstrapSamples"] = double(plan.norm.bootstrapSamples);
+    m.numbers["largeStepProb"] = plan.settings.largeStepProb;
+    for (size_t k = 0; k < plan.norm.bk.size(); ++k)
+      if (plan.norm.bk[k] != 0) m.numbers["b" + std::to_string(k)] = plan.norm.bk[k];
+  } else {
+    m.numbers["samples"] = double(merged.samples);
+    m.numbers["spp"] = double(merged.samples) / pixels;
+  }
   m.strings["farm.job"] = id.jobId;
-  m.strings["farm.sceneHash"] = id.sceneHash;
-  m.strings["farm.method"] = methodName(plan.settings.method);
-  m.numbers["farm.seed"] = double(plan.settings.seed);
-  m.numbers["farm.b"] = plan.norm.b;
-  m.numbers["farm.bStdErr"] = plan.norm.bStdErr;
-  for (size_t k = 0; k < plan.norm.bk.size(); ++k) m.numbers[fmt::format("farm.b{}", k)] = plan.norm.bk[k];
-  m.numbers["farm.totalMutations"] = double(plan.norm.totalMutations);
-  m.numbers["farm.samples"] = double(merged.samples);
-  m.numbers["farm.units"] = double(plan.units.size());
+  m.numbers["farm.tasks"] = double(splitTasks(plan).size());
   m.numbers["farm.wireVersion"] = wire::kFormatVersion;
   return m;
 }
@@ -113,6 +135,7 @@ void writePartialExr(const std::string& path, const JobIdentity& id, const JobPl
   ImageMetadata m;
   m.strings["farm.job"] = id.jobId;
   m.strings["farm.sceneHash"] = id.sceneHash;
+  m.strings["farm.scene"] = id.scene;
   m.strings["farm.method"] = methodName(plan.settings.method);
   m.strings["farm.plan"] = toHex(wire::jobPlanBytes(plan));
   m.strings["farm.partial"] = toHex(wire::partialHeaderBytes(result));  // the raw sums are the EXR's channels
@@ -144,7 +167,7 @@ PartialExr readPartialExr(const std::string& path) {
     throw std::runtime_error(fmt::format("{}: farm format version {} (this build reads {})", path,
                                          num("farm.wireVersion"), wire::kFormatVersion));
   PartialExr p;
-  p.id = {str("farm.job"), str("farm.sceneHash")};
+  p.id = {str("farm.job"), str("farm.sceneHash"), str("farm.scene")};
   try {
     p.planBytes = fromHex(str("farm.plan"), path);
     p.plan = wire::parseJobPlan(p.planBytes);

@@ -38,6 +38,7 @@ bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, Par
 // Who a job is, for metadata.
 struct JobIdentity {
   std::string jobId, sceneHash;
+  std::string scene;  // the scene file's name inside its bundle
 };
 
 // The developed image's metadata: a pure function of the identity, the plan and the merged result.

@@ -1,11 +1,12 @@
 // `mltfarm render SCENE.xml ... -o OUT.exr`: renders a scene and writes OUT.exr (with metadata) and
-// OUT.png. For now every render runs in this process (--in-process, the default); issue 4's local farm
-// (a coordinator plus worker processes on loopback) will become the default and call the same job API.
+// OUT.png. By default through the local farm (a coordinator plus worker processes on loopback,
+// tools/cli/farm_render.h); --in-process renders in this process. Both call the same job API.
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 
 #include "tools/cli/commands.h"
+#include "tools/cli/farm_render.h"
 #include "tools/cli/render_local.h"
 
 namespace mlt::cli {
@@ -19,7 +20,8 @@ struct RenderCliOptions {
   float largeStep = 0.3f, exposure = 0;
   uint64_t seed = 1;
   std::vector<std::string> defines;
-  bool inProcess = true, quiet = false, techniqueImages = false;
+  bool inProcess = false, quiet = false, techniqueImages = false;
+  int workers = 0;
 };
 
 std::map<std::string, std::string> parseDefines(const std::vector<std::string>& defines) {
@@ -83,14 +85,17 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("--exposure", o->exposure, "PNG exposure in stops (the EXR is never scaled)")->capture_default_str();
   sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
   sub.add_flag("--in-process,!--farm", o->inProcess,
-               "Render in this process (the default for now; the local farm will become the default)");
+               "Render in this process instead of the local farm (a coordinator and worker processes on "
+               "loopback, the default). --define, --time and --technique-images always render in-process");
+  sub.add_option("-w,--workers", o->workers,
+                 "Local farm: worker processes (default: --threads, else every core)")
+      ->check(CLI::NonNegativeNumber);
   sub.add_flag("--technique-images", o->techniqueImages,
                "bdpt: also write OUT_s<s>_t<t>.exr/.png, one image per technique (s light vertices, t camera "
                "vertices), MIS-weighted so that they sum to the full image");
   sub.add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
 
   return [o, spp, maxDepth, rrDepth]() -> int {
-    if (!o->inProcess) throw std::runtime_error("--farm: the local farm is not available yet; use --in-process");
     LocalRenderOptions lo;
     lo.scenePath = o->scene;
     lo.defines = parseDefines(o->defines);
@@ -115,7 +120,10 @@ CommandRun setupRender(CLI::App& sub) {
     lo.exposureStops = o->exposure;
     lo.showProgress = !o->quiet;
     lo.techniqueImages = o->techniqueImages;
-    renderLocal(lo);
+    if (!o->inProcess && lo.defines.empty() && s.timeBudgetSeconds == 0 && !lo.techniqueImages)
+      renderWithLocalFarm(lo, o->workers > 0 ? o->workers : o->threads);
+    else
+      renderLocal(lo);
     return 0;
   };
 }

@@ -1,0 +1,12 @@
+// `mltfarm render` through the local farm (the default): a coordinator and W worker processes on
+// loopback, started, fed the scene, and shut down again (coordinator/embedded.h). Writes OUT.exr and
+// OUT.png like the in-process renderer, with the same metadata keys; the image does not depend on W.
+#pragma once
+#include "tools/cli/render_local.h"
+
+namespace mlt::cli {
+
+// workers: worker processes (0 = every core), each running one work unit at a time.
+void renderWithLocalFarm(const LocalRenderOptions& options, int workers);
+
+}  // namespace mlt::cli
