@@ -166,6 +166,12 @@ void writeEvalOutputs(const EvalConfig& cfg, EvalResult& result) {
     auto os = open("refs.csv");
     writeRefsCsv(os, result.refs);
   }
+  if (!result.calibrations.empty()) {
+    auto os = open("calibration.csv");
+    os << "scene,method,fixed_seconds,seconds_per_work\n";
+    for (const Calibration& c : result.calibrations)
+      os << fmt::format("{},{},{:.6g},{:.6g}\n", c.scene, c.method, c.fixedSeconds, c.perWork);
+  }
   {
     auto os = open("summary.md");
     writeSummary(os, cfg, result);
@@ -243,6 +249,7 @@ EvalResult runEval(const EvalConfig& cfg) {
         model.perWork = (t2 - t1) / (w2 - w1);
         if (!(model.perWork > 0)) model.perWork = t2 / w2;
         model.fixed = std::max(0.0, t1 - model.perWork * w1);
+        result.calibrations.push_back({es.name, ms.label, model.fixed, model.perWork});
         logLine(cfg, fmt::format("{} {}: calibration {:.3g} s fixed + {:.3g} s per {}", es.name, ms.label,
                                  model.fixed, model.perWork,
                                  isMarkovChainMethod(ms.method) ? "mutation per pixel" : "spp"));

@@ -83,7 +83,15 @@ struct EvalConfig {
   bool verbose = true;                  // progress lines on stderr
 };
 
+// The fitted time model of one (scene, method) in equal-time mode: seconds = fixed + perWork * work.
+struct Calibration {
+  std::string scene, method;
+  double fixedSeconds = 0;   // bootstrap, planning, thread start-up: paid by every run whatever its budget
+  double perWork = 0;        // seconds per spp (sample methods) or per mutation per pixel (chains)
+};
+
 struct EvalResult {
+  std::vector<Calibration> calibrations;  // empty with equal samples
   std::vector<RunRecord> runs;
   std::vector<ReferenceInfo> refs;
   StabilityReport stability;

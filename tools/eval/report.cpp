@@ -159,15 +159,20 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
     os << "\n";
 
     // Detail at the largest budget.
-    os << fmt::format("At the largest budget ({:g}{}):\n\n", cfg.budgets[last], cfg.equalSamples ? "" : " s");
-    os << "| method | relMSE mean +- std | seconds | work (spp or mutations/px) | mean brightness err | "
-          "acceptance | flagged runs |\n|---|---|---|---|---|---|---|\n";
+    os << fmt::format("At the largest budget ({:g}{}). *fixed cost*: the calibrated time every run pays whatever its "
+                      "budget (bootstrap, planning); a budget below it leaves the method its minimum work.\n\n",
+                      cfg.budgets[last], cfg.equalSamples ? "" : " s");
+    os << "| method | relMSE mean +- std | seconds | fixed cost s | work (spp or mutations/px) | "
+          "mean brightness err | acceptance | flagged runs |\n|---|---|---|---|---|---|---|---|\n";
     for (const auto& m : sorted) {
       auto it = groups.find({m, last});
       if (it == groups.end()) continue;
       GroupStats s = groupStats(it->second);
-      os << fmt::format("| {} | {:.3g} +- {:.2g} | {:.2f} | {:.3g} | {:+.2f}% +- {:.2f}% | {} | {}/{} |\n", m, s.relMSE,
-                        s.relMSEStd, s.seconds, s.work, 100 * s.meanErr, 100 * s.meanErrStd,
+      std::string fixed = "-";
+      for (const Calibration& c : result.calibrations)
+        if (c.scene == scene && c.method == m) fixed = fmt::format("{:.2f}", c.fixedSeconds);
+      os << fmt::format("| {} | {:.3g} +- {:.2g} | {:.2f} | {} | {:.3g} | {:+.2f}% +- {:.2f}% | {} | {}/{} |\n", m,
+                        s.relMSE, s.relMSEStd, s.seconds, fixed, s.work, 100 * s.meanErr, 100 * s.meanErrStd,
                         s.acceptance >= 0 ? fmt::format("{:.3f}", s.acceptance) : std::string("-"), s.flagged,
                         s.runs);
     }
