@@ -11,3 +11,11 @@ foreach(src ${MLTFARM_FARM_TESTS})
     target_compile_definitions(${name} PRIVATE MLTFARM_TOOLS_DIR="${CMAKE_BINARY_DIR}/tools")
   endif()
 endforeach()
+
+# deploy/slurm/mltfarm.sbatch on a one-node Slurm cluster started by the script (exit 77 = skipped, with
+# the reason, when the daemons cannot run on this machine).
+if(TARGET mltfarm)
+  add_test(NAME farm_slurm_local
+           COMMAND bash ${PROJECT_SOURCE_DIR}/tests/farm/slurm_local_test.sh ${CMAKE_BINARY_DIR}/tools)
+  set_tests_properties(farm_slurm_local PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 600 RUN_SERIAL TRUE)
+endif()
