@@ -2,7 +2,7 @@
 # libraries and makes them depend on the executables they start. Included from the top-level
 # CMakeLists.txt after tests/ (the targets are created there by the generic per-file loop).
 file(GLOB MLTFARM_FARM_TESTS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/farm_*_test.cpp
-     ${PROJECT_SOURCE_DIR}/tests/bench/farm_*_bench.cpp)
+     ${PROJECT_SOURCE_DIR}/tests/bench/farm*_bench.cpp)
 foreach(src ${MLTFARM_FARM_TESTS})
   get_filename_component(name ${src} NAME_WE)
   if(TARGET ${name})

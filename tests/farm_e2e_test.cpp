@@ -119,6 +119,27 @@ TEST_F(FarmE2E, WorkerKilledMidJobStillGivesByteIdenticalImage) {
   c.fetch(a.jobId, farm.dir / "out.exr");
   EXPECT_EQ(readFile(farm.dir / "out.exr"), readFile(ref_.mltExr));
   EXPECT_GE(countOccurrences(readFile(farm.dir / "coordinator-0.log"), "event=lease_expired"), 1u);
+  // The surviving worker exits cleanly on SIGTERM.
+  EXPECT_EQ(farm.workers.back()->terminate(std::chrono::seconds(20)), 0);
+  EXPECT_NE(readFile(farm.dir / "worker-1.log").find("event=stopped"), std::string::npos);
+}
+
+TEST_F(FarmE2E, WorkerStoppedWithSigtermReturnsItsLeases) {
+  Farm farm;
+  farm.startCoordinator({}, "");
+  ChildProcess& slow = farm.startWorker(2, {"--debug-task-delay-ms", "100000"});
+  auto c = farm.client();
+  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  farm.waitFor(a.jobId, [](const JobStatus& s) { return s.leasedTasks >= 2; });
+  EXPECT_EQ(slow.terminate(std::chrono::seconds(20)), 0);
+  // Returned at once, not after the lease timeout: nothing is leased any more.
+  JobStatus s = c.get(a.jobId);
+  EXPECT_EQ(s.leasedTasks, 0u) << describeStatus(s);
+  EXPECT_NE(readFile(farm.dir / "coordinator-0.log").find("event=returned"), std::string::npos);
+  farm.startWorker(1);
+  EXPECT_EQ(farm.waitDone(a.jobId).state, JobState::Done);
+  c.fetch(a.jobId, farm.dir / "out.exr");
+  EXPECT_EQ(readFile(farm.dir / "out.exr"), readFile(ref_.mltExr));
 }
 
 TEST_F(FarmE2E, CoordinatorKilledAndRestartedResumesWithoutRecomputing) {
