@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -31,6 +32,7 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::stri
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork failed");
   if (pid_ == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive the process (thread) that started us
     if (captureStdout) dup2(pipeFds[1], STDOUT_FILENO);
     else if (logFd >= 0) dup2(logFd, STDOUT_FILENO);
     if (logFd >= 0) dup2(logFd, STDERR_FILENO);

@@ -1,6 +1,7 @@
 // Child processes for the local farm, the farm tests and the benchmark: fork/exec with stdout optionally
 // captured (the coordinator prints "listening on HOST:PORT") and stderr appended to a log file.
-// The destructor kills (SIGKILL) and reaps a child that is still running.
+// The destructor kills (SIGKILL) and reaps a child that is still running; a child is also killed when the
+// thread that started it dies (PR_SET_PDEATHSIG), so a crashed test or `mltfarm render` leaves no orphans.
 #pragma once
 #include <sys/types.h>
 
