@@ -239,6 +239,10 @@ CommandRun setupEval(CLI::App& sub) {
       for (const auto& p : v.problems) std::fprintf(stderr, " %s.", p.c_str());
       std::fprintf(stderr, "\n");
     }
+    for (const auto& f : result.failures) {
+      ++failing;
+      std::fprintf(stderr, "%s / %s: cannot render: %s\n", f.scene.c_str(), f.method.c_str(), f.error.c_str());
+    }
     std::printf("eval: %zu runs, %d scene/method pairs with problems; see %s/summary.md\n", result.runs.size(),
                 failing, cfg.outDir.c_str());
     return 0;

@@ -142,6 +142,97 @@ std::string safeName(const std::string& s) {
   return o;
 }
 
+// Calibration (equal time), the R runs at every budget, and the error map of one method on one scene.
+void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& sceneRef, const RenderSettings& base,
+                const Reference& ref, const MethodSpec& ms, EvalResult& result) {
+  const RenderScene* scene = &sceneRef;
+  const int largest = int(cfg.budgets.size()) - 1;
+  RenderSettings settings = base;
+  settings.method = ms.method;
+  settings.chains = cfg.base.chains;
+  settings.samplesPerUnit = cfg.base.samplesPerUnit;
+
+  // ---- Calibration (equal time) -------------------------------------------------------------
+  TimeModel model;
+  if (!cfg.equalSamples) {
+    const double w1 = minWork(ms.method), w2 = 4 * w1;
+    RenderSettings cal = settings;
+    cal.seed = hashKeys(cfg.seed, fnv1a64(es.name), fnv1a64(ms.label), uint64_t(0xca1b));
+    setWork(cal, w1);
+    double t1 = renderOnce(cfg, es, *scene, cal).seconds;
+    setWork(cal, w2);
+    double t2 = renderOnce(cfg, es, *scene, cal).seconds;
+    model.perWork = (t2 - t1) / (w2 - w1);
+    if (!(model.perWork > 0)) model.perWork = t2 / w2;
+    model.fixed = std::max(0.0, t1 - model.perWork * w1);
+    result.calibrations.push_back({es.name, ms.label, model.fixed, model.perWork});
+    logLine(cfg, fmt::format("{} {}: calibration {:.3g} s fixed + {:.3g} s per {}", es.name, ms.label,
+                             model.fixed, model.perWork,
+                             isMarkovChainMethod(ms.method) ? "mutation per pixel" : "spp"));
+  }
+
+  std::vector<std::pair<double, std::vector<Color>>> largestImages;  // (relMSE, image) at the largest budget
+  for (int bi = 0; bi < int(cfg.budgets.size()); ++bi) {
+    const double budget = cfg.budgets[bi];
+    for (int run = 0; run < cfg.runs; ++run) {
+      RenderSettings rs = settings;
+      rs.seed = runSeed(cfg.seed, es.name, ms.label, bi, run);
+      const double work = cfg.equalSamples ? budget : model.workFor(budget, ms.method);
+      setWork(rs, work);
+      RunOutput out = renderOnce(cfg, es, *scene, rs);
+      if (!cfg.equalSamples) model.refine(work, out.seconds);
+      if (out.image.size() != ref.image.size())
+        throw std::runtime_error(fmt::format("eval: {} {} rendered {} pixels, the reference has {}", es.name,
+                                             ms.label, out.image.size(), ref.image.size()));
+      // Test hooks: a deliberately biased method, an injected outlier run.
+      if (ms.testScale != 1.0)
+        for (Color& c : out.image) c *= float(ms.testScale);
+      const OutlierInjection* inj = cfg.injectOutlier ? &*cfg.injectOutlier : nullptr;
+      if (inj && inj->method == ms.label && inj->run == run && (inj->budgetIndex < 0 || inj->budgetIndex == bi))
+        for (size_t i = 0; i < out.image.size(); ++i)
+          out.image[i] = ref.image[i] + float(inj->factor) * (out.image[i] - ref.image[i]);
+
+      RunRecord rec;
+      rec.scene = es.name;
+      rec.method = ms.label;
+      rec.mode = cfg.farm ? "farm" : "local";
+      rec.budgetIndex = bi;
+      rec.budget = budget;
+      rec.run = run;
+      rec.seed = rs.seed;
+      rec.seconds = out.seconds;
+      rec.work = isMarkovChainMethod(ms.method) ? rs.mutationsPerPixel : double(rs.spp);
+      rec.samples = out.samples;
+      rec.metrics = computeMetrics(out.image, ref.image, cfg.eps);
+      rec.markovChain = isMarkovChainMethod(ms.method);
+      if (rec.markovChain) {
+        rec.proposedPerLength = out.stats.proposedPerLength;
+        rec.acceptedPerLength = out.stats.acceptedPerLength;
+        auto [p, a] = proposedAccepted(out.stats);
+        rec.acceptance = p > 0 ? double(a) / double(p) : 0;
+        rec.chains = out.chains;
+        rec.stuckChains = out.stuckChains;
+      }
+      logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}",
+                               es.name, ms.label, budget, run, rec.seconds, rec.work, rec.metrics.relMSE,
+                               100 * rec.metrics.meanErr,
+                               rec.markovChain ? fmt::format(", acceptance {:.3f}", rec.acceptance) : ""));
+      if (bi == largest && cfg.errorMaps) largestImages.emplace_back(rec.metrics.relMSE, std::move(out.image));
+      result.runs.push_back(std::move(rec));
+    }
+  }
+  // Error map and image of the median run at the largest budget.
+  if (cfg.errorMaps && !largestImages.empty()) {
+    std::sort(largestImages.begin(), largestImages.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    const auto& median = largestImages[(largestImages.size() - 1) / 2].second;
+    const std::string stem = safeName(es.name) + "_" + safeName(ms.label);
+    writeErrorMapPng((fs::path(cfg.outDir) / "maps" / (stem + "_error.png")).string(), base.width, base.height,
+                     relativeErrorMap(median, ref.image, cfg.eps));
+    writePng((fs::path(cfg.outDir) / "maps" / (stem + "_image.png")).string(), base.width, base.height, median);
+  }
+}
+
 }  // namespace
 
 void writeEvalOutputs(const EvalConfig& cfg, EvalResult& result) {
@@ -193,7 +284,6 @@ EvalResult runEval(const EvalConfig& cfg) {
       if (cfg.methods[i].label == cfg.methods[j].label)
         throw std::invalid_argument("eval: method label '" + cfg.methods[i].label + "' given twice");
   fs::create_directories(fs::path(cfg.outDir) / "maps");
-  const int largest = int(cfg.budgets.size()) - 1;
 
   EvalResult result;
   for (const EvalScene& es : cfg.scenes) {
@@ -231,89 +321,15 @@ EvalResult runEval(const EvalConfig& cfg) {
                                 base.width, base.height, ref.image);
 
     for (const MethodSpec& ms : cfg.methods) {
-      RenderSettings settings = base;
-      settings.method = ms.method;
-      settings.chains = cfg.base.chains;
-      settings.samplesPerUnit = cfg.base.samplesPerUnit;
-
-      // ---- Calibration (equal time) -------------------------------------------------------------
-      TimeModel model;
-      if (!cfg.equalSamples) {
-        const double w1 = minWork(ms.method), w2 = 4 * w1;
-        RenderSettings cal = settings;
-        cal.seed = hashKeys(cfg.seed, fnv1a64(es.name), fnv1a64(ms.label), uint64_t(0xca1b));
-        setWork(cal, w1);
-        double t1 = renderOnce(cfg, es, *scene, cal).seconds;
-        setWork(cal, w2);
-        double t2 = renderOnce(cfg, es, *scene, cal).seconds;
-        model.perWork = (t2 - t1) / (w2 - w1);
-        if (!(model.perWork > 0)) model.perWork = t2 / w2;
-        model.fixed = std::max(0.0, t1 - model.perWork * w1);
-        result.calibrations.push_back({es.name, ms.label, model.fixed, model.perWork});
-        logLine(cfg, fmt::format("{} {}: calibration {:.3g} s fixed + {:.3g} s per {}", es.name, ms.label,
-                                 model.fixed, model.perWork,
-                                 isMarkovChainMethod(ms.method) ? "mutation per pixel" : "spp"));
-      }
-
-      std::vector<std::pair<double, std::vector<Color>>> largestImages;  // (relMSE, image) at the largest budget
-      for (int bi = 0; bi < int(cfg.budgets.size()); ++bi) {
-        const double budget = cfg.budgets[bi];
-        for (int run = 0; run < cfg.runs; ++run) {
-          RenderSettings rs = settings;
-          rs.seed = runSeed(cfg.seed, es.name, ms.label, bi, run);
-          const double work = cfg.equalSamples ? budget : model.workFor(budget, ms.method);
-          setWork(rs, work);
-          RunOutput out = renderOnce(cfg, es, *scene, rs);
-          if (!cfg.equalSamples) model.refine(work, out.seconds);
-          if (out.image.size() != ref.image.size())
-            throw std::runtime_error(fmt::format("eval: {} {} rendered {} pixels, the reference has {}", es.name,
-                                                 ms.label, out.image.size(), ref.image.size()));
-          // Test hooks: a deliberately biased method, an injected outlier run.
-          if (ms.testScale != 1.0)
-            for (Color& c : out.image) c *= float(ms.testScale);
-          const OutlierInjection* inj = cfg.injectOutlier ? &*cfg.injectOutlier : nullptr;
-          if (inj && inj->method == ms.label && inj->run == run && (inj->budgetIndex < 0 || inj->budgetIndex == bi))
-            for (size_t i = 0; i < out.image.size(); ++i)
-              out.image[i] = ref.image[i] + float(inj->factor) * (out.image[i] - ref.image[i]);
-
-          RunRecord rec;
-          rec.scene = es.name;
-          rec.method = ms.label;
-          rec.mode = cfg.farm ? "farm" : "local";
-          rec.budgetIndex = bi;
-          rec.budget = budget;
-          rec.run = run;
-          rec.seed = rs.seed;
-          rec.seconds = out.seconds;
-          rec.work = isMarkovChainMethod(ms.method) ? rs.mutationsPerPixel : double(rs.spp);
-          rec.samples = out.samples;
-          rec.metrics = computeMetrics(out.image, ref.image, cfg.eps);
-          rec.markovChain = isMarkovChainMethod(ms.method);
-          if (rec.markovChain) {
-            rec.proposedPerLength = out.stats.proposedPerLength;
-            rec.acceptedPerLength = out.stats.acceptedPerLength;
-            auto [p, a] = proposedAccepted(out.stats);
-            rec.acceptance = p > 0 ? double(a) / double(p) : 0;
-            rec.chains = out.chains;
-            rec.stuckChains = out.stuckChains;
-          }
-          logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}",
-                                   es.name, ms.label, budget, run, rec.seconds, rec.work, rec.metrics.relMSE,
-                                   100 * rec.metrics.meanErr,
-                                   rec.markovChain ? fmt::format(", acceptance {:.3f}", rec.acceptance) : ""));
-          if (bi == largest && cfg.errorMaps) largestImages.emplace_back(rec.metrics.relMSE, std::move(out.image));
-          result.runs.push_back(std::move(rec));
-        }
-      }
-      // Error map and image of the median run at the largest budget.
-      if (cfg.errorMaps && !largestImages.empty()) {
-        std::sort(largestImages.begin(), largestImages.end(),
-                  [](const auto& a, const auto& b) { return a.first < b.first; });
-        const auto& median = largestImages[(largestImages.size() - 1) / 2].second;
-        const std::string stem = safeName(es.name) + "_" + safeName(ms.label);
-        writeErrorMapPng((fs::path(cfg.outDir) / "maps" / (stem + "_error.png")).string(), base.width, base.height,
-                         relativeErrorMap(median, ref.image, cfg.eps));
-        writePng((fs::path(cfg.outDir) / "maps" / (stem + "_image.png")).string(), base.width, base.height, median);
+      const size_t runsBefore = result.runs.size(), calibrationsBefore = result.calibrations.size();
+      try {
+        evalMethod(cfg, es, *scene, base, ref, ms, result);
+      } catch (const std::exception& e) {
+        // The method cannot render this scene: keep the other methods' results and report why.
+        result.runs.resize(runsBefore);
+        result.calibrations.resize(calibrationsBefore);
+        result.failures.push_back({es.name, ms.label, e.what()});
+        logLine(cfg, fmt::format("{} {}: FAILED: {}", es.name, ms.label, e.what()));
       }
     }
     writeEvalOutputs(cfg, result);  // keep what was measured so far

@@ -90,7 +90,14 @@ struct Calibration {
   double perWork = 0;        // seconds per spp (sample methods) or per mutation per pixel (chains)
 };
 
+// A method that could not run on a scene at all (e.g. it rejects the scene's settings): reported, and the
+// evaluation goes on with the other methods.
+struct MethodFailure {
+  std::string scene, method, error;
+};
+
 struct EvalResult {
+  std::vector<MethodFailure> failures;
   std::vector<Calibration> calibrations;  // empty with equal samples
   std::vector<RunRecord> runs;
   std::vector<ReferenceInfo> refs;

@@ -194,6 +194,11 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
     std::string okList;
     for (const MethodVerdict& v : result.stability.verdicts)
       if (v.scene == scene && v.ok()) okList += (okList.empty() ? "" : ", ") + v.method;
+    for (const MethodFailure& f : result.failures)
+      if (f.scene == scene) {
+        anyProblem = true;
+        os << "- **" << f.method << "** cannot render this scene: " << f.error << "\n";
+      }
     if (!okList.empty()) os << "- No failure detected for: " << okList << ".\n";
     if (!anyProblem && okList.empty()) os << "- No verdicts.\n";
     os << "\n";
