@@ -8,6 +8,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "common/job/render_job.h"
 
@@ -185,6 +186,76 @@ TEST(JobApi, TechniqueImagesSumToTheFullImage) {
   PartialResult plain;
   for (const WorkUnit& u : plan.units) plain.add(runSampleUnit(eval, plan, u));
   expectBitIdentical(plain.film, merged.film);
+}
+
+// Values over many orders of magnitude (like fireflies next to dim pixels), so that double sums of
+// unquantized units depend on the order of additions.
+class WideRangeEvaluator final : public PathEvaluator {
+ public:
+  WideRangeEvaluator(int w, int h) : w_(w), h_(h) {}
+  void evaluate(SampleSource& src, const Vec2* pixel, PathContribution& out) const override {
+    src.startStream(Stream::Camera);
+    const Vec2 u = src.next2D();
+    const float v = std::exp2(-30.f * u.x) * (1.f + u.y) * 1000.f;
+    out.cameraRaster = Vec2(pixel->x + u.x, pixel->y + u.y);
+    out.splats.push_back({out.cameraRaster, Color(v, 1.f / (1.f + v), u.y), 0, 2});
+    src.startStream(Stream::Light);
+    const Vec2 p = src.next2D();
+    out.splats.push_back({Vec2(p.x * w_, p.y * h_), Color(v * 0.37f, u.x, 3e-6f * v), 1, 1});
+  }
+
+ private:
+  int w_, h_;
+};
+
+// Sample units merge exactly: any grouping of the same units (one by one, as `--in-process` does, or in
+// contiguous tasks summed first, as the farm does) gives bit-identical sums, and those sums are
+// multiples of 2^-kQuantumExp.
+TEST(JobApi, AnyGroupingOfSampleUnitsGivesIdenticalBits) {
+  const int w = 9, h = 7;
+  for (Method m : {Method::BDPT, Method::LT}) {
+    RenderSettings s = settingsFor(m, 12, w, h);
+    s.samplesPerUnit = 1;
+    const JobPlan plan = planSampleJob(s);
+    ASSERT_EQ(plan.units.size(), 12u);
+    const WideRangeEvaluator eval(w, h);
+    std::vector<PartialResult> units;
+    for (const WorkUnit& u : plan.units) units.push_back(runSampleUnit(eval, plan, u));
+    for (const PartialResult& r : units)
+      for (size_t i = 0; i < r.film.pixelCount(); ++i)
+        for (double v : {r.film.pixelSums()[i].r, r.film.splatSums()[i].g, r.film.splatSums()[i].b}) {
+          const double scaled = std::ldexp(v, 26);
+          ASSERT_EQ(scaled, std::floor(scaled)) << "not a multiple of 2^-26: " << v;
+        }
+    // Groupings: tasks as contiguous ranges, summed from zero, then added in task order.
+    auto mergeGrouped = [&](const std::vector<size_t>& bounds) {
+      PartialResult merged;
+      for (size_t g = 0; g + 1 < bounds.size(); ++g) {
+        PartialResult task;
+        task.film = Film(w, h);
+        for (size_t u = bounds[g]; u < bounds[g + 1]; ++u) task.add(units[u]);
+        merged.add(task);
+      }
+      return merged;
+    };
+    PartialResult oneByOne;
+    for (const PartialResult& r : units) oneByOne.add(r);
+    for (const std::vector<size_t>& bounds : std::vector<std::vector<size_t>>{
+             {0, 12}, {0, 6, 12}, {0, 1, 5, 11, 12}, {0, 3, 6, 9, 12}, {0, 7, 8, 12}}) {
+      PartialResult grouped = mergeGrouped(bounds);
+      expectBitIdentical(oneByOne.film, grouped.film);
+      for (size_t i = 0; i < oneByOne.film.pixelCount(); ++i) {
+        EXPECT_EQ(std::bit_cast<uint64_t>(oneByOne.film.pixelSums()[i].b), std::bit_cast<uint64_t>(grouped.film.pixelSums()[i].b));
+        EXPECT_EQ(std::bit_cast<uint64_t>(oneByOne.film.splatSums()[i].g), std::bit_cast<uint64_t>(grouped.film.splatSums()[i].g));
+        EXPECT_EQ(std::bit_cast<uint64_t>(oneByOne.film.splatSums()[i].b), std::bit_cast<uint64_t>(grouped.film.splatSums()[i].b));
+      }
+      EXPECT_EQ(oneByOne.samples, grouped.samples);
+      const std::vector<Color> a = developSampleImage(plan, oneByOne), b = developSampleImage(plan, grouped);
+      ASSERT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0) << methodName(m);
+    }
+    // The pixel counts stay exact integers.
+    for (double c : oneByOne.film.pixelCounts()) EXPECT_EQ(c, m == Method::LT ? 0.0 : 12.0);
+  }
 }
 
 }  // namespace

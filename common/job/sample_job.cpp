@@ -17,6 +17,7 @@
 #include <string>
 
 #include "common/core/rng.h"
+#include "common/mlt/develop.h"
 #include "common/render/render_scene.h"
 #include "common/sampler/sample_source.h"
 
@@ -154,6 +155,10 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
       }
     }
   }
+  // Exact merging in any grouping (common/mlt/develop.h): sums become multiples of 2^-kQuantumExp, so
+  // adding units one by one (in-process) or task by task (the farm) gives the same bits. Pixel counts
+  // are small integers and already exact. The technique films are never merged across processes.
+  quantizeFilm(film, s.seed, unit.index);
   result.samples = uint64_t(unit.sampleEnd - unit.sampleBegin) * film.pixelCount();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

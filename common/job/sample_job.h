@@ -4,6 +4,16 @@
 // primary samples IndependentSource(hashKeys(seed, y * width + x), k). A work unit holds samples
 // [sampleBegin, sampleEnd) of every pixel. For lt the pixel loop only defines that indexing: one light
 // path per (pixel, sample), all of its splats go to the splat buffer.
+//
+// Exact merging: each unit's pixel and splat sums are rounded to multiples of 2^-kQuantumExp (unbiased
+// stochastic rounding keyed by (job seed, unit, element); quantizeFilm in common/mlt/develop.h, the same
+// as the Markov chains), and pixel counts are integers. Sums of such values are exact in double, so any
+// grouping of units (one by one in-process, contiguous tasks on the farm) develops to identical bytes.
+// Bound: a unit's sum per pixel and channel must stay below 2^(52 - kQuantumExp) = 2^26 ~ 6.7e7 (else
+// the unit fails with a message naming the value), and the merged per-pixel sums below 2^(53 -
+// kQuantumExp) = 2^27 ~ 1.3e8 (i.e. spp * mean pixel value, splats in the same units); beyond that the
+// image is still right but its last bits may depend on the grouping. The rounding error is at most
+// 2^-26 ~ 1.5e-8 per unit and pixel before the division by the sample count.
 #pragma once
 #include <vector>
 
