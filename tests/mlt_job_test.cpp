@@ -11,7 +11,9 @@
 #include <memory>
 #include <vector>
 
+#include "common/job/mlt_job.h"
 #include "common/job/render_job.h"
+#include "common/mlt/chain_report.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
 
@@ -147,6 +149,93 @@ TEST(MltJob, MmltAllocatesMutationsProportionallyToBk) {
   }
   EXPECT_EQ(total, n.totalMutations);
   EXPECT_EQ(n.totalMutations, uint64_t(std::llround(8.0 * 16 * 12)));
+}
+
+bool samePlan(const JobPlan& a, const JobPlan& b) {
+  if (a.units.size() != b.units.size() || a.settings.chains != b.settings.chains) return false;
+  for (size_t i = 0; i < a.units.size(); ++i) {
+    const WorkUnit &u = a.units[i], &v = b.units[i];
+    if (u.index != v.index || u.startCandidate != v.startCandidate || u.mutations != v.mutations ||
+        u.pathLength != v.pathLength || std::memcmp(&u.startContribution, &v.startContribution, sizeof(double)) != 0)
+      return false;
+  }
+  return std::memcmp(&a.norm.b, &b.norm.b, sizeof(double)) == 0 && a.norm.bk == b.norm.bk &&
+         a.norm.bkStdErr == b.norm.bkStdErr && a.norm.mutationsPerLength == b.norm.mutationsPerLength &&
+         a.norm.totalMutations == b.norm.totalMutations;
+}
+
+// A time-budgeted render plans twice from one bootstrap: that must equal planning afresh with the
+// chosen mutations per pixel (what `--mutations-per-pixel` does), and a bootstrap computed with other
+// settings must be refused.
+TEST(MltJob, PlanFromExistingBootstrapEqualsPlanningAfresh) {
+  for (Method m : kMethods) {
+    RenderSettings s = settingsFor(m, 13);
+    s.chains = 0;
+    s.width = 16;
+    s.height = 12;
+    const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), s);
+    for (double mpp : {3.0, 37.2, 1500.0}) {
+      s.mutationsPerPixel = mpp;
+      EXPECT_TRUE(samePlan(planMarkovChainJob(cornell(), s, boot), planJob(cornell(), s))) << methodName(m) << " " << mpp;
+    }
+    RenderSettings other = s;
+    other.seed = 14;
+    EXPECT_THROW(planMarkovChainJob(cornell(), other, boot), std::invalid_argument);
+    other = s;
+    other.bootstrapSamples = 4001;
+    EXPECT_THROW(planMarkovChainJob(cornell(), other, boot), std::invalid_argument);
+    other = s;
+    other.integrator.maxDepth = 3;
+    EXPECT_THROW(planMarkovChainJob(cornell(), other, boot), std::invalid_argument);
+    other = s;  // not read by the bootstrap: allowed
+    other.largeStepProb = 0.5f;
+    other.chains = 5;
+    EXPECT_NO_THROW(planMarkovChainJob(cornell(), other, boot));
+  }
+}
+
+// The render summary's numbers: acceptance and per-length counts add up to what the chains report, and
+// the metadata round trip (used to print the summary of a farm render) loses nothing.
+TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
+  const JobPlan plan = planJob(cornell(), settingsFor(Method::MMLT, 15));
+  PartialResult merged;
+  for (const PartialResult& p : runAll(cornell(), plan)) merged.add(p);
+  const ChainReport r = makeChainReport(plan, merged);
+  EXPECT_EQ(r.chains, plan.units.size());
+  EXPECT_EQ(r.mutations, plan.norm.totalMutations);
+  uint64_t chains = 0, mutations = 0;
+  double accepted = 0;
+  ASSERT_EQ(r.lengths.size(), 4u);  // k = 1..4
+  for (const ChainLengthReport& l : r.lengths) {
+    EXPECT_EQ(l.bk, plan.norm.bk[size_t(l.k)]);
+    EXPECT_EQ(l.mutations, plan.norm.mutationsPerLength[size_t(l.k)]) << l.k;
+    chains += l.chains;
+    mutations += l.mutations;
+    accepted += l.acceptance * double(l.mutations);
+  }
+  EXPECT_EQ(chains, r.chains);
+  EXPECT_EQ(mutations, r.mutations);
+  EXPECT_NEAR(accepted / double(mutations), r.acceptance, 1e-9);
+  EXPECT_GT(r.acceptance, 0.0);
+  EXPECT_LT(r.acceptance, 1.0);
+  EXPECT_NEAR(double(merged.stats.largeAccepted + merged.stats.smallAccepted),
+              r.acceptanceLarge * double(r.largeSteps) + r.acceptanceSmall * double(r.smallSteps), 1e-6);
+
+  ImageMetadata m;
+  m.strings["method"] = "mmlt";
+  addChainMetadata(r, m);
+  const ChainReport back = chainReportFromMetadata(m);
+  EXPECT_EQ(formatChainSummary(back, 1.5, 2.5), formatChainSummary(r, 1.5, 2.5));
+  const std::string text = formatChainSummary(r, 1.5, 2.5);
+  EXPECT_NE(text.find("b = "), std::string::npos) << text;
+  EXPECT_NE(text.find("acceptance"), std::string::npos) << text;
+  EXPECT_NE(text.find("mutations/s"), std::string::npos) << text;
+  // 4000 candidates per length give b a relative standard error above 2% here: a warning.
+  ASSERT_GT(r.relativeStdErr(), kMaxRelativeStdErrB);
+  EXPECT_NE(chainWarnings(r).find("increase --bootstrap"), std::string::npos);
+  ChainReport precise = r;
+  precise.bStdErr = 0.5 * kMaxRelativeStdErrB * r.b;
+  EXPECT_EQ(chainWarnings(precise), "");
 }
 
 // Image mean of a render, averaged over `runs` seeds, with its standard error.

@@ -73,43 +73,78 @@ JobPlan directPlan(const JobPlan& plan) {
   return d;
 }
 
+// The bootstrap reads these fields of the settings (see MarkovChainBootstrap); a plan may only reuse a
+// bootstrap computed with the same values.
+void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
+  auto differs = [](const char* field, auto was, auto now) {
+    throw std::invalid_argument(fmt::format("settings: {} is {} but the bootstrap was computed with {}", field,
+                                            now, was));
+  };
+  if (b.method != s.method) differs("method", methodName(b.method), methodName(s.method));
+  if (b.seed != s.seed) differs("seed", b.seed, s.seed);
+  if (b.width != s.width || b.height != s.height)
+    differs("film size", fmt::format("{}x{}", b.width, b.height), fmt::format("{}x{}", s.width, s.height));
+  if (b.integrator.maxDepth != s.integrator.maxDepth) differs("max depth", b.integrator.maxDepth, s.integrator.maxDepth);
+  if (b.integrator.rrDepth != s.integrator.rrDepth) differs("rr depth", b.integrator.rrDepth, s.integrator.rrDepth);
+  if (b.integrator.heuristic != s.integrator.heuristic)
+    differs("MIS heuristic", int(b.integrator.heuristic), int(s.integrator.heuristic));
+  if (b.separateDirect != s.separateDirect) differs("separateDirect", b.separateDirect, s.separateDirect);
+  if (b.bootstrapSamples != s.bootstrapSamples) differs("bootstrap samples", b.bootstrapSamples, s.bootstrapSamples);
+}
+
 }  // namespace
 
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
+  const RenderSettings& s = settings;
+  if (!isMarkovChainMethod(s.method))
+    throw std::invalid_argument(std::string("settings: method ") + methodName(s.method) + " is not a Markov chain method");
+  if (s.bootstrapSamples < 2)
+    throw std::invalid_argument("settings: bootstrap samples must be >= 2, got " + std::to_string(s.bootstrapSamples));
+  if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
+  if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
+  if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
+  if (s.separateDirect && s.method == Method::PSSMLT)
+    throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
+
+  MarkovChainBootstrap out;
+  out.settings = s;
+  const std::vector<int> lengths = chainLengths(s);
+  if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
+  BootstrapConfig bc;
+  bc.candidatesPerLength = uint64_t(s.bootstrapSamples);
+  bc.pathLengths = lengths;
+  const uint64_t seed = s.seed;
+  out.result = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {
+    auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);
+    auto path = std::make_shared<PathContribution>();
+    return [target, path, seed](uint64_t index, int k) {
+      IndependentSource source(seed, index);
+      target->evaluate(source, k, *path);
+      return targetFunction(*path);
+    };
+  });
+  return out;
+}
+
 JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
+  return planMarkovChainJob(scene, settings, bootstrapMarkovChainJob(scene, settings));
+}
+
+JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& settings,
+                           const MarkovChainBootstrap& bootstrap) {
   const RenderSettings& s = settings;
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
-  if (s.bootstrapSamples < 2)
-    throw std::invalid_argument("settings: bootstrap samples must be >= 2, got " + std::to_string(s.bootstrapSamples));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
-  if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
-  if (s.separateDirect && s.method == Method::PSSMLT)
-    throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
   KelemenSource validate(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
+  checkBootstrapFits(bootstrap.settings, s);
 
   JobPlan plan;
   plan.settings = s;
   const uint64_t P = uint64_t(s.width) * uint64_t(s.height);
   const uint64_t M = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(s.mutationsPerPixel * double(P))));
   const std::vector<int> lengths = chainLengths(s);
-
-  // ---- bootstrap ----
-  BootstrapResult boot;
-  if (!lengths.empty()) {
-    BootstrapConfig bc;
-    bc.candidatesPerLength = uint64_t(s.bootstrapSamples);
-    bc.pathLengths = lengths;
-    const uint64_t seed = s.seed;
-    boot = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {
-      auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);
-      auto path = std::make_shared<PathContribution>();
-      return [target, path, seed](uint64_t index, int k) {
-        IndependentSource source(seed, index);
-        target->evaluate(source, k, *path);
-        return targetFunction(*path);
-      };
-    });
-  }
+  const BootstrapResult& boot = bootstrap.result;
   Normalization& norm = plan.norm;
   norm.b = boot.b;
   norm.bStdErr = boot.bStdErr;

@@ -6,9 +6,25 @@
 #include <vector>
 
 #include "common/job/render_job.h"
+#include "common/mlt/bootstrap.h"
 
 namespace mlt {
 
+// The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
+// method, width/height, integrator, separateDirect, bootstrapSamples). mutationsPerPixel, chains, the
+// mutation kernel and the large-step probability do not enter it, so one bootstrap serves plans with any
+// number of mutations (a time-budgeted render plans twice from one bootstrap; see render_local.cpp).
+struct MarkovChainBootstrap {
+  RenderSettings settings;  // the settings it was computed with (width/height resolved)
+  BootstrapResult result;
+};
+
+// settings.width/height must be resolved against the scene camera (planJob does this).
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);
+// Chain allocation from an existing bootstrap: the same plan, bit for bit, as planMarkovChainJob(scene,
+// settings). Throws std::invalid_argument naming the field if `settings` differs from the bootstrap's in
+// a field the bootstrap reads.
+JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings, const MarkovChainBootstrap& boot);
 // Bootstrap (b, bk, candidates), chain allocation: a plan whose units are chains. settings.width/height
 // are already resolved against the scene camera by planJob.
 JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);

@@ -1,21 +1,25 @@
 // The in-process renderer (see render_local.h).
 #include "tools/cli/render_local.h"
 
+#include <fmt/format.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_pipeline.h>
 
-#include <atomic>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
 
 #include "common/integrators/evaluators.h"
 #include "common/io/png_io.h"
+#include "common/job/mlt_job.h"
 #include "common/job/sample_job.h"
+#include "common/mlt/chain_report.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
 #include "common/scene/scene_hash.h"
@@ -30,6 +34,98 @@ using Clock = std::chrono::steady_clock;
 // Without --spp, a time-limited pt/lt/bdpt render plans this many samples per pixel in units of one
 // sample each and stops when the time is up.
 constexpr int kTimeOnlySppCap = 1 << 16;
+
+// Time-budgeted Markov chains (see planChainsForTimeBudget).
+constexpr double kTrialShare = 0.07;          // share of the budget spent measuring mutation throughput
+constexpr uint64_t kTrialUnitMutations = 8192;  // a trial unit: this long a prefix of a planned chain
+constexpr double kBudgetFill = 0.95;          // share of the remaining budget planned (develop, write, tail)
+constexpr int kMutationsPerPixelDigits = 3;   // the chosen mutations per pixel, rounded down to this many
+
+// Runs items 0, 1, ... (issued in order while next(i) says so) in parallel with run(i) and hands the
+// results to merge(i, result) strictly in issue order, so sums do not depend on the thread count.
+template <class Next, class Run, class Merge>
+void runPipeline(size_t tokens, Next next, Run run, Merge merge) {
+  size_t issued = 0;
+  tbb::parallel_pipeline(
+      tokens,
+      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                     [&](tbb::flow_control& fc) -> size_t {
+                                       if (!next(issued)) {
+                                         fc.stop();
+                                         return 0;
+                                       }
+                                       return issued++;
+                                     }) &
+          tbb::make_filter<size_t, std::pair<size_t, std::shared_ptr<PartialResult>>>(
+              tbb::filter_mode::parallel,
+              [&](size_t i) { return std::make_pair(i, std::make_shared<PartialResult>(run(i))); }) &
+          tbb::make_filter<std::pair<size_t, std::shared_ptr<PartialResult>>, void>(
+              tbb::filter_mode::serial_in_order,
+              [&](const std::pair<size_t, std::shared_ptr<PartialResult>>& r) { merge(r.first, *r.second); }));
+}
+
+// x rounded down to `digits` significant decimal digits, returned as the double that this decimal reads
+// as (so that typing the printed value reproduces it exactly).
+double roundDownSignificant(double x, int digits) {
+  if (!(x > 0) || !std::isfinite(x)) return 0;
+  const double q = std::pow(10.0, std::floor(std::log10(x)) - (digits - 1));
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, std::floor(x / q * (1 + 1e-12)) * q);
+  return std::strtod(buf, nullptr);
+}
+
+// A time budget for a Markov chain method. The image must stay a pure function of (settings, seed,
+// mutations per pixel), so no chain is cut short or dropped; instead:
+//   1. bootstrap once (a pure function of the seed and settings, independent of the mutation count);
+//   2. measure mutation throughput on every thread with prefixes of the planned chains, for about
+//      kTrialShare of the budget (their results are discarded: the trial never touches the image);
+//   3. choose mutations per pixel to fill what remains of the budget (rounded down to 3 digits), plan
+//      again from the same bootstrap, and run every chain of that plan.
+// `--mutations-per-pixel` with the chosen value renders the same image, bit for bit, without a budget.
+JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Clock::time_point start, int threads,
+                                ChainBudgetReport& report) {
+  s.width = scene.camera().width();  // resolved as planJob does
+  s.height = scene.camera().height();
+  const double budget = s.timeBudgetSeconds;
+  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(scene, s);
+  JobPlan trialPlan = planMarkovChainJob(scene, s, boot);
+  std::vector<WorkUnit> trialUnits;
+  for (const WorkUnit& u : trialPlan.units)
+    if (u.mutations > 0) {
+      trialUnits.push_back(u);
+      trialUnits.back().mutations = std::min(u.mutations, kTrialUnitMutations);
+    }
+  if (trialUnits.empty()) return trialPlan;  // b = 0: no chains to run, whatever the budget
+
+  // 2. Throughput trial.
+  const auto trialStart = Clock::now();
+  const auto trialEnd = trialStart + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(kTrialShare * budget));
+  uint64_t trialMutations = 0;
+  runPipeline(
+      size_t(2 * threads),
+      [&](size_t i) { return i < size_t(threads) || Clock::now() < trialEnd; },
+      [&](size_t i) { return runMarkovChain(scene, trialPlan, trialUnits[i % trialUnits.size()]); },
+      [&](size_t, const PartialResult& r) { trialMutations += r.samples; });
+  report.trialSeconds = std::chrono::duration<double>(Clock::now() - trialStart).count();
+  report.trialMutations = trialMutations;
+  report.mutationsPerSecond = double(trialMutations) / std::max(report.trialSeconds, 1e-9);
+
+  // 3. Fill the rest of the budget.
+  double remaining = budget - std::chrono::duration<double>(Clock::now() - start).count();
+  if (remaining < report.trialSeconds) {
+    std::fprintf(stderr, "warning: bootstrap and throughput trial took %.2f s of the %.2f s budget; rendering "
+                 "%.2f s more (increase --time or decrease --bootstrap)\n", budget - remaining, budget,
+                 report.trialSeconds);
+    remaining = report.trialSeconds;
+  }
+  const double P = double(s.width) * double(s.height);
+  const double mpp = roundDownSignificant(kBudgetFill * remaining * report.mutationsPerSecond / P,
+                                          kMutationsPerPixelDigits);
+  s.mutationsPerPixel = std::max(mpp, 1.0 / P);  // at least one mutation
+  report.mutationsPerPixel = s.mutationsPerPixel;
+  return planMarkovChainJob(scene, s, boot);
+}
 
 // OUT_s<s>_t<t>.exr (+ .png) for every technique, developed with the full image's splat scale P / N.
 void writeTechniqueImages(const std::string& outExr, const TechniqueFilms& techniques,
@@ -93,19 +189,26 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   const auto start = Clock::now();
-  result.plan = planJob(*scene, settings);
+  const bool chains = isMarkovChainMethod(settings.method);
+  if (timed && chains) {
+    result.chainBudget.emplace();
+    result.plan = planChainsForTimeBudget(*scene, settings, start, threads, *result.chainBudget);
+  } else {
+    result.plan = planJob(*scene, settings);
+  }
   JobPlan& plan = result.plan;
   const size_t nUnits = plan.units.size();
   std::unique_ptr<ProgressBar> progress;
   if (options.showProgress)
     progress = std::make_unique<ProgressBar>(std::string("render ") + methodName(settings.method), nUnits,
-                                             settings.timeBudgetSeconds);
+                                             chains ? 0.0 : settings.timeBudgetSeconds);
 
-  // Units flow through a pipeline: issued in index order (stopping when the time is up), run in
-  // parallel, merged strictly in index order, so the sums do not depend on the thread count.
+  // Units are issued in index order (pt/lt/bdpt with a time budget: until the time is up; Markov chains
+  // always run every planned chain), run in parallel, merged strictly in index order.
   const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
                                     std::chrono::duration<double>(settings.timeBudgetSeconds));
-  size_t nextUnit = 0, merged = 0;
+  const bool stopAtDeadline = timed && !chains;
+  size_t merged = 0;
   const RenderScene& sceneRef = *scene;
   std::unique_ptr<TechniqueFilms> techniques;
   std::unique_ptr<PathEvaluator> techniqueEvaluator;
@@ -115,40 +218,28 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     techniques = std::make_unique<TechniqueFilms>(maxLength, plan.settings.width, plan.settings.height);
     techniqueEvaluator = makeEvaluator(sceneRef, Method::BDPT, plan.settings.integrator);
   }
-  auto runUnit = [&](size_t i) {
-    if (techniques) return runSampleUnit(*techniqueEvaluator, plan, plan.units[i], techniques.get());
-    return runWorkUnit(sceneRef, plan, plan.units[i]);
-  };
-  tbb::parallel_pipeline(
+  const auto runStart = Clock::now();
+  runPipeline(
       techniques ? 1 : size_t(2 * threads),  // technique films are shared: one unit at a time
-      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                     [&](tbb::flow_control& fc) -> size_t {
-                                       if (nextUnit >= nUnits || (timed && Clock::now() >= deadline)) {
-                                         fc.stop();
-                                         return 0;
-                                       }
-                                       return nextUnit++;
-                                     }) &
-          tbb::make_filter<size_t, std::shared_ptr<PartialResult>>(
-              tbb::filter_mode::parallel,
-              [&](size_t i) { return std::make_shared<PartialResult>(runUnit(i)); }) &
-          tbb::make_filter<std::shared_ptr<PartialResult>, void>(tbb::filter_mode::serial_in_order,
-                                                                 [&](std::shared_ptr<PartialResult> r) {
-                                                                   result.merged.add(*r);
-                                                                   ++merged;
-                                                                   if (progress) progress->update(merged);
-                                                                 }));
-  if (merged == 0) throw std::runtime_error("no work unit finished within the time budget");
+      [&](size_t i) { return i < nUnits && !(stopAtDeadline && Clock::now() >= deadline); },
+      [&](size_t i) {
+        if (techniques) return runSampleUnit(*techniqueEvaluator, plan, plan.units[i], techniques.get());
+        return runWorkUnit(sceneRef, plan, plan.units[i]);
+      },
+      [&](size_t, const PartialResult& r) {
+        result.merged.add(r);
+        ++merged;
+        if (progress) progress->update(merged);
+      });
+  if (merged == 0 && nUnits > 0) throw std::runtime_error("no work unit finished within the time budget");
   // A time budget ran out: pt/lt/bdpt develop with the samples the merged result holds (sample_job.cpp).
-  // Markov chains keep the full plan; developImage sees fewer mutations than planned and normalizes by
-  // the mutations merged (a chain subset of a stationary chain set; see mlt_job.cpp).
-  if (merged < nUnits && !isMarkovChainMethod(plan.settings.method)) plan.units.resize(merged);
+  if (merged < nUnits) plan.units.resize(merged);
+  result.runSeconds = std::chrono::duration<double>(Clock::now() - runStart).count();
   result.image = developImage(plan, result.merged);
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
 
   // ---- Metadata and output --------------------------------------------------------------------------
-  const bool chains = isMarkovChainMethod(plan.settings.method);
-  const double pixels = double(result.merged.film.pixelCount());
+  const double pixels = double(plan.settings.width) * double(plan.settings.height);
   ImageMetadata& m = result.metadata;
   m.strings["software"] = "mltfarm";
   m.strings["method"] = methodName(plan.settings.method);
@@ -165,16 +256,18 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   m.numbers["workUnitsPlanned"] = double(nUnits);
   m.numbers["nonFiniteSamples"] = double(result.merged.film.nonFiniteSamples());
   if (timed) m.numbers["timeBudgetSeconds"] = plan.settings.timeBudgetSeconds;
+  std::optional<ChainReport> report;
   if (chains) {
-    m.numbers["mutations"] = double(result.merged.samples);
-    m.numbers["mutationsPerPixel"] = double(result.merged.samples) / pixels;
-    m.numbers["chains"] = double(merged);
-    m.numbers["b"] = plan.norm.b;
-    m.numbers["bStdErr"] = plan.norm.bStdErr;
-    m.numbers["bootstrapSamples"] = double(plan.norm.bootstrapSamples);
+    report = makeChainReport(plan, result.merged);
+    addChainMetadata(*report, m);
     m.numbers["largeStepProb"] = plan.settings.largeStepProb;
-    for (size_t k = 0; k < plan.norm.bk.size(); ++k)
-      if (plan.norm.bk[k] != 0) m.numbers["b" + std::to_string(k)] = plan.norm.bk[k];
+    m.numbers["bootstrapSeconds"] = plan.norm.bootstrapSeconds;
+    m.numbers["chainSeconds"] = result.runSeconds;
+    m.numbers["mutationsPerSecond"] = double(result.merged.samples) / std::max(result.runSeconds, 1e-9);
+    if (result.chainBudget) {
+      m.numbers["trialSeconds"] = result.chainBudget->trialSeconds;
+      m.numbers["trialMutations"] = double(result.chainBudget->trialMutations);
+    }
   } else {
     m.numbers["samples"] = double(result.merged.samples);
     m.numbers["spp"] = double(result.merged.samples) / pixels;
@@ -185,18 +278,31 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     writePng(png, plan.settings.width, plan.settings.height, result.image, options.exposureStops);
     if (techniques) writeTechniqueImages(options.outExr, *techniques, result, options.exposureStops);
   }
-  if (progress) {
-    const char* what = chains ? "mutations" : "samples";
+  const uint64_t nonFinite = result.merged.film.nonFiniteSamples();
+  const std::string nonFiniteNote = nonFinite ? ", non-finite samples dropped: " + std::to_string(nonFinite) : "";
+  if (progress && chains) {
+    const std::string trialNote =
+        result.chainBudget ? fmt::format(", throughput trial {:.2f} s", result.chainBudget->trialSeconds) : "";
+    progress->finish(fmt::format("{}: {}/{} work units in {:.2f} s (bootstrap {:.2f} s{}){}",
+                                 methodName(plan.settings.method), merged, nUnits, result.seconds,
+                                 plan.norm.bootstrapSeconds, trialNote, nonFiniteNote));
+    std::string summary = formatChainSummary(*report, plan.norm.bootstrapSeconds, result.runSeconds);
+    if (result.chainBudget)
+      summary += fmt::format("time budget {} s: the trial measured {:.4g} mutations/s; chose {} mutations per pixel "
+                             "(render again with --mutations-per-pixel {} --seed {} for the same image)\n",
+                             plan.settings.timeBudgetSeconds, result.chainBudget->mutationsPerSecond,
+                             result.chainBudget->mutationsPerPixel, result.chainBudget->mutationsPerPixel,
+                             plan.settings.seed);
+    std::fputs(summary.c_str(), stderr);
+  } else if (progress) {
     char line[512];
-    std::snprintf(line, sizeof line, "%s: %llu %s in %.2f s (%.3g %s/s), %zu/%zu work units%s%s",
-                  methodName(plan.settings.method), (unsigned long long)result.merged.samples, what, result.seconds,
-                  double(result.merged.samples) / std::max(result.seconds, 1e-9), what, merged, nUnits,
-                  result.merged.film.nonFiniteSamples() ? ", non-finite samples dropped: " : "",
-                  result.merged.film.nonFiniteSamples()
-                      ? std::to_string(result.merged.film.nonFiniteSamples()).c_str()
-                      : "");
+    std::snprintf(line, sizeof line, "%s: %llu samples in %.2f s (%.3g samples/s), %zu/%zu work units%s",
+                  methodName(plan.settings.method), (unsigned long long)result.merged.samples, result.seconds,
+                  double(result.merged.samples) / std::max(result.seconds, 1e-9), merged, nUnits,
+                  nonFiniteNote.c_str());
     progress->finish(line);
   }
+  if (report) std::fputs(chainWarnings(*report).c_str(), stderr);
   return result;
 }
 

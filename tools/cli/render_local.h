@@ -16,17 +16,27 @@ namespace mlt::cli {
 struct LocalRenderOptions {
   std::string scenePath;
   std::map<std::string, std::string> defines;   // Mitsuba -D name=value
-  RenderSettings settings;                      // width/height 0 = the scene's film size
+  // width/height 0 = the scene's film size. timeBudgetSeconds > 0: pt/lt/bdpt run units until the time
+  // is up; Markov chain methods choose mutationsPerPixel to fill the budget and run every chain.
+  RenderSettings settings;
   std::optional<int> maxDepth, rrDepth;         // unset: the scene's <integrator> values, else defaults
   bool sppGiven = true;                         // false with a time budget: run until the time is up
   int threads = 0;                              // 0 = every core
   std::string outExr;                           // empty: write nothing
   std::string outPng;                           // empty: OUT.exr with the extension replaced by .png
   float exposureStops = 0;                      // PNG only
-  bool showProgress = true;
+  bool showProgress = true;                     // also the summary (b, acceptance, mutations/s) of chains
   // bdpt: also write OUT_s<s>_t<t>.exr per technique (path lengths up to max depth, or 8 if unlimited);
   // the units then run one at a time (each still uses every thread).
   bool techniqueImages = false;
+};
+
+// A Markov chain render with a time budget: the throughput trial and the mutations per pixel it chose.
+struct ChainBudgetReport {
+  double trialSeconds = 0;
+  uint64_t trialMutations = 0;
+  double mutationsPerSecond = 0;  // measured by the trial, on every thread
+  double mutationsPerPixel = 0;   // chosen; `--mutations-per-pixel` with it reproduces the image exactly
 };
 
 struct LocalRenderResult {
@@ -36,6 +46,8 @@ struct LocalRenderResult {
   ImageMetadata metadata;
   std::string sceneHash;
   double seconds = 0;          // wall time of planning + rendering (not loading or writing)
+  double runSeconds = 0;       // wall time of running the work units (after planning)
+  std::optional<ChainBudgetReport> chainBudget;  // Markov chains with a time budget
 };
 
 LocalRenderResult renderLocal(const LocalRenderOptions& options);

@@ -1,0 +1,160 @@
+#include "common/mlt/chain_report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/mlt/method_target.h"
+
+namespace mlt {
+
+namespace {
+
+double ratio(uint64_t a, uint64_t b) { return b > 0 ? double(a) / double(b) : 0.0; }
+
+// "b<k>" -> k (digits only after the prefix), else -1.
+int lengthOfKey(const std::string& key, const std::string& prefix) {
+  if (key.size() <= prefix.size() || key.compare(0, prefix.size(), prefix) != 0) return -1;
+  int k = 0;
+  for (size_t i = prefix.size(); i < key.size(); ++i) {
+    if (key[i] < '0' || key[i] > '9' || k > 100000) return -1;
+    k = 10 * k + (key[i] - '0');
+  }
+  return k;
+}
+
+double number(const ImageMetadata& m, const std::string& key) {
+  const auto it = m.numbers.find(key);
+  return it == m.numbers.end() ? 0.0 : it->second;
+}
+
+}  // namespace
+
+ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
+  const RenderSettings& s = plan.settings;
+  const Normalization& norm = plan.norm;
+  ChainReport r;
+  r.method = methodName(s.method);
+  r.b = norm.b;
+  r.bStdErr = norm.bStdErr;
+  r.bootstrapSamples = norm.bootstrapSamples;
+  r.mutations = merged.samples;
+  r.mutationsPerPixel = s.mutationsPerPixel;
+  r.hasAcceptance = true;
+  r.largeSteps = merged.stats.largeProposed;
+  r.smallSteps = merged.stats.smallProposed;
+  r.acceptance = ratio(merged.stats.largeAccepted + merged.stats.smallAccepted, r.largeSteps + r.smallSteps);
+  r.acceptanceLarge = ratio(merged.stats.largeAccepted, r.largeSteps);
+  r.acceptanceSmall = ratio(merged.stats.smallAccepted, r.smallSteps);
+
+  // Chains merged, per path length (units of a separateDirect direct pass have no mutations).
+  std::vector<uint64_t> chainsPerSlot(std::max<size_t>(norm.mutationsPerLength.size(), 1), 0);
+  for (uint32_t i : merged.units) {
+    if (i >= plan.units.size() || plan.units[i].mutations == 0) continue;
+    const size_t slot = size_t(std::max(plan.units[i].pathLength, 0));
+    if (slot >= chainsPerSlot.size()) chainsPerSlot.resize(slot + 1, 0);
+    ++chainsPerSlot[slot];
+    ++r.chains;
+  }
+  if (s.method == Method::MMLT) {
+    const auto& proposed = merged.stats.proposedPerLength;
+    const auto& accepted = merged.stats.acceptedPerLength;
+    for (int k = mmltMinLength(s.separateDirect); k < int(norm.bk.size()); ++k) {
+      ChainLengthReport l;
+      l.k = k;
+      l.bk = norm.bk[size_t(k)];
+      l.bkStdErr = k < int(norm.bkStdErr.size()) ? norm.bkStdErr[size_t(k)] : 0.0;
+      l.chains = size_t(k) < chainsPerSlot.size() ? chainsPerSlot[size_t(k)] : 0;
+      l.mutations = size_t(k) < proposed.size() ? proposed[size_t(k)] : 0;
+      l.acceptance = ratio(size_t(k) < accepted.size() ? accepted[size_t(k)] : 0, l.mutations);
+      r.lengths.push_back(l);
+    }
+  }
+  return r;
+}
+
+void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
+  m.numbers["b"] = r.b;
+  m.numbers["bStdErr"] = r.bStdErr;
+  m.numbers["bootstrapSamples"] = double(r.bootstrapSamples);
+  m.numbers["chains"] = double(r.chains);
+  m.numbers["mutations"] = double(r.mutations);
+  m.numbers["mutationsPerPixel"] = r.mutationsPerPixel;
+  m.numbers["acceptance"] = r.acceptance;
+  m.numbers["acceptanceLarge"] = r.acceptanceLarge;
+  m.numbers["acceptanceSmall"] = r.acceptanceSmall;
+  m.numbers["largeSteps"] = double(r.largeSteps);
+  m.numbers["smallSteps"] = double(r.smallSteps);
+  for (const ChainLengthReport& l : r.lengths) {
+    const std::string k = std::to_string(l.k);
+    m.numbers["b" + k] = l.bk;
+    m.numbers["bStdErr" + k] = l.bkStdErr;
+    m.numbers["chains" + k] = double(l.chains);
+    m.numbers["mutations" + k] = double(l.mutations);
+    m.numbers["acceptance" + k] = l.acceptance;
+  }
+}
+
+ChainReport chainReportFromMetadata(const ImageMetadata& m) {
+  ChainReport r;
+  if (const auto it = m.strings.find("method"); it != m.strings.end()) r.method = it->second;
+  r.b = number(m, "b");
+  r.bStdErr = number(m, "bStdErr");
+  r.bootstrapSamples = uint64_t(number(m, "bootstrapSamples"));
+  r.chains = uint64_t(number(m, "chains"));
+  r.mutations = uint64_t(number(m, "mutations"));
+  r.mutationsPerPixel = number(m, "mutationsPerPixel");
+  r.hasAcceptance = m.numbers.count("acceptance") > 0;
+  r.acceptance = number(m, "acceptance");
+  r.acceptanceLarge = number(m, "acceptanceLarge");
+  r.acceptanceSmall = number(m, "acceptanceSmall");
+  r.largeSteps = uint64_t(number(m, "largeSteps"));
+  r.smallSteps = uint64_t(number(m, "smallSteps"));
+  for (const auto& [key, value] : m.numbers) {
+    const int k = lengthOfKey(key, "b");
+    const std::string ks = std::to_string(k);
+    if (k < 0 || m.numbers.count("mutations" + ks) == 0) continue;  // an image without the per-length keys
+    ChainLengthReport l;
+    l.k = k;
+    l.bk = value;
+    l.bkStdErr = number(m, "bStdErr" + ks);
+    l.chains = uint64_t(number(m, "chains" + ks));
+    l.mutations = uint64_t(number(m, "mutations" + ks));
+    l.acceptance = number(m, "acceptance" + ks);
+    r.lengths.push_back(l);
+  }
+  std::sort(r.lengths.begin(), r.lengths.end(), [](const auto& a, const auto& b) { return a.k < b.k; });
+  return r;
+}
+
+std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, double chainSeconds,
+                               const std::string& secondsNote) {
+  std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.2f}%, {} bootstrap samples", r.b, r.bStdErr,
+                                100 * r.relativeStdErr(), r.bootstrapSamples);
+  out += bootstrapSeconds >= 0 ? fmt::format(", {:.2f} s)\n", bootstrapSeconds) : ")\n";
+  if (!r.lengths.empty()) {
+    out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}\n", "k", "b_k ± SE", "chains", "mutations", "acceptance");
+    for (const ChainLengthReport& l : r.lengths)
+      out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>9.1f}%\n", l.k,
+                         fmt::format("{:.6g} ± {:.2g}", l.bk, l.bkStdErr), l.chains, l.mutations, 100 * l.acceptance);
+  }
+  if (r.hasAcceptance)
+    out += fmt::format("acceptance {:.1f}% (large steps {:.1f}%, small steps {:.1f}%)\n", 100 * r.acceptance,
+                       100 * r.acceptanceLarge, 100 * r.acceptanceSmall);
+  // {} prints the shortest decimal that reads back as the same double: typing it reproduces the image.
+  out += fmt::format("{} mutations ({} per pixel, {} chains) in {:.2f} s{} = {:.4g} mutations/s\n", r.mutations,
+                     r.mutationsPerPixel, r.chains, chainSeconds, secondsNote,
+                     chainSeconds > 0 ? double(r.mutations) / chainSeconds : 0.0);
+  return out;
+}
+
+std::string chainWarnings(const ChainReport& r) {
+  if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
+  return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
+                     "as uncertain: increase --bootstrap (now {} samples{})\n",
+                     100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, r.bootstrapSamples,
+                     r.lengths.empty() ? "" : " over all path lengths");
+}
+
+}  // namespace mlt

@@ -1,0 +1,61 @@
+// What a Markov chain render reports (issue 3, "prints b with its standard error, the acceptance rate and
+// mutations per second"): b +- SE from the bootstrap, per path length k (mmlt) b_k +- SE, chains, mutations
+// M_k and acceptance, and the acceptance of large and small steps. The report is written into the image
+// metadata (addChainMetadata) and read back from it (chainReportFromMetadata), so `mltfarm render` prints
+// the same summary whether the image was rendered in this process or fetched from the farm.
+//
+// Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
+//   b, bStdErr, bootstrapSamples, chains, mutations, mutationsPerPixel (the setting: rendering again with
+//   --mutations-per-pixel equal to it reproduces the image), acceptance, acceptanceLarge, acceptanceSmall,
+//   largeSteps, smallSteps; mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/io/exr_io.h"
+#include "common/job/render_job.h"
+
+namespace mlt {
+
+// A bootstrap whose b has a larger relative standard error than this gets a warning (the whole image
+// carries b's error as a brightness error that no number of mutations removes).
+constexpr double kMaxRelativeStdErrB = 0.02;
+
+struct ChainLengthReport {
+  int k = 0;
+  double bk = 0, bkStdErr = 0;
+  uint64_t chains = 0, mutations = 0;
+  double acceptance = 0;  // accepted / proposed of chains of this length
+};
+
+struct ChainReport {
+  std::string method;
+  double b = 0, bStdErr = 0;
+  uint64_t bootstrapSamples = 0;
+  uint64_t chains = 0, mutations = 0;
+  double mutationsPerPixel = 0;
+  bool hasAcceptance = false;  // false: an image whose metadata does not carry the acceptance keys
+  double acceptance = 0, acceptanceLarge = 0, acceptanceSmall = 0;
+  uint64_t largeSteps = 0, smallSteps = 0;
+  std::vector<ChainLengthReport> lengths;  // mmlt only, ascending k
+  double relativeStdErr() const { return b > 0 ? bStdErr / b : 0.0; }
+};
+
+// From a plan and the chains merged so far (units of the direct pass of separateDirect are not chains).
+ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged);
+void addChainMetadata(const ChainReport& report, ImageMetadata& metadata);
+// The inverse of addChainMetadata (keys that are missing stay 0; hasAcceptance tells if acceptance was there).
+ChainReport chainReportFromMetadata(const ImageMetadata& metadata);
+
+// The summary printed after a render, several lines, each ending in '\n':
+//   b = X ± SE (rel. R%, N bootstrap samples, T s)
+//   a table per path length (mmlt), acceptance, mutations / seconds / mutations per second.
+// bootstrapSeconds < 0 leaves the time out of the first line; chainSeconds is the wall time of the chains
+// (secondsNote, e.g. " (wall time incl. startup)", follows it when it is something else).
+std::string formatChainSummary(const ChainReport& report, double bootstrapSeconds, double chainSeconds,
+                               const std::string& secondsNote = "");
+// "warning: ... increase --bootstrap\n" when b's relative standard error exceeds kMaxRelativeStdErrB, else "".
+std::string chainWarnings(const ChainReport& report);
+
+}  // namespace mlt
