@@ -209,7 +209,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
         rec.proposedPerLength = out.stats.proposedPerLength;
         rec.acceptedPerLength = out.stats.acceptedPerLength;
         auto [p, a] = proposedAccepted(out.stats);
-        rec.acceptance = p > 0 ? double(a) / double(p) : 0;
+        rec.acceptance = p > 0 ? double(a) / double(p) : -1;  // -1: not reported (farm runs)
         rec.chains = out.chains;
         rec.stuckChains = out.stuckChains;
       }

@@ -53,7 +53,7 @@ GroupStats groupStats(const std::vector<const RunRecord*>& g) {
     t.push_back(r->seconds);
     w.push_back(r->work);
     m.push_back(r->metrics.meanErr);
-    if (r->markovChain) a.push_back(r->acceptance);
+    if (r->markovChain && r->acceptance >= 0) a.push_back(r->acceptance);
     if (!r->flags.empty()) ++s.flagged;
   }
   s.runs = int(g.size());

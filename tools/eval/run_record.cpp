@@ -61,7 +61,7 @@ void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
     os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{}\n",
                       csvQuote(r.scene), csvQuote(r.method), r.mode, r.budgetIndex, r.budget, r.run, r.seed,
                       r.seconds, r.work, r.samples, m.relMSE, m.mse, m.mae, m.meanErr,
-                      r.markovChain ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
+                      r.markovChain && r.acceptance >= 0 ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
                       r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)));
   }
 }
@@ -115,9 +115,9 @@ std::vector<RunRecord> readRunsCsv(std::istream& is) {
       r.metrics.mse = std::stod(f[11]);
       r.metrics.mae = std::stod(f[12]);
       r.metrics.meanErr = std::stod(f[13]);
-      r.markovChain = !f[14].empty();
-      r.acceptance = r.markovChain ? std::stod(f[14]) : -1;
+      r.acceptance = f[14].empty() ? -1 : std::stod(f[14]);
       r.chains = std::stoi(f[15]);
+      r.markovChain = !f[14].empty() || r.chains > 0;
       r.stuckChains = std::stoi(f[16]);
       r.metrics.nonFinite = std::stoull(f[17]);
       std::stringstream flags(f[18]);

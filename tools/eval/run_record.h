@@ -24,7 +24,7 @@ struct RunRecord {
   uint64_t samples = 0;          // pixel samples or mutations actually done
   ImageMetrics metrics;
   bool markovChain = false;
-  double acceptance = -1;        // overall; -1 for sample-based methods
+  double acceptance = -1;        // overall; -1 for sample-based methods and when not reported (farm)
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;
   int chains = 0, stuckChains = 0;  // chains with acceptance below the stuck threshold
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
