@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "common/io/png_io.h"
+#include "common/mlt/chain_report.h"
 #include "proto/convert.h"
 
 namespace mlt::farm {
@@ -104,15 +105,8 @@ ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const Pa
   m.numbers["workUnitsPlanned"] = double(plan.units.size());
   m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());
   if (chains) {
-    m.numbers["mutations"] = double(merged.samples);
-    m.numbers["mutationsPerPixel"] = double(merged.samples) / pixels;
-    m.numbers["chains"] = double(merged.units.size());
-    m.numbers["b"] = plan.norm.b;
-    m.numbers["bStdErr"] = plan.norm.bStdErr;
-    m.numbers["bootstrapSamples"] = double(plan.norm.bootstrapSamples);
+    addChainMetadata(makeChainReport(plan, merged), m);  // b, b_k, acceptance, ... (common/mlt/chain_report.h)
     m.numbers["largeStepProb"] = plan.settings.largeStepProb;
-    for (size_t k = 0; k < plan.norm.bk.size(); ++k)
-      if (plan.norm.bk[k] != 0) m.numbers["b" + std::to_string(k)] = plan.norm.bk[k];
   } else {
     m.numbers["samples"] = double(merged.samples);
     m.numbers["spp"] = double(merged.samples) / pixels;

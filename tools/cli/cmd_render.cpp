@@ -1,10 +1,13 @@
 // `mltfarm render SCENE.xml ... -o OUT.exr`: renders a scene and writes OUT.exr (with metadata) and
 // OUT.png. By default through the local farm (a coordinator plus worker processes on loopback,
 // tools/cli/farm_render.h); --in-process renders in this process. Both call the same job API.
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 
+#include "common/io/exr_io.h"
+#include "common/mlt/chain_report.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/farm_render.h"
 #include "tools/cli/render_local.h"
@@ -35,6 +38,20 @@ std::map<std::string, std::string> parseDefines(const std::vector<std::string>& 
   return out;
 }
 
+// The local farm, then (Markov chains) the summary that `--in-process` prints, read back from the image's
+// metadata; the seconds are the farm's wall time, startup and bootstrap included.
+void renderWithLocalFarmAndReport(const LocalRenderOptions& lo, int workers) {
+  const auto start = std::chrono::steady_clock::now();
+  renderWithLocalFarm(lo, workers);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!isMarkovChainMethod(lo.settings.method) || lo.outExr.empty()) return;
+  const ChainReport report = chainReportFromMetadata(readExr(lo.outExr).metadata);
+  if (lo.showProgress)
+    std::fputs(formatChainSummary(report, -1, seconds, " (local farm wall time, startup and bootstrap included)")
+                   .c_str(), stderr);
+  std::fputs(chainWarnings(report).c_str(), stderr);
+}
+
 CommandRun setupRender(CLI::App& sub) {
   auto o = std::make_shared<RenderCliOptions>();
   sub.add_option("scene", o->scene, "Scene file (Mitsuba 0.6 / 3.x XML subset)")->required();  // existence is checked by the loader (exit code 2)
@@ -62,9 +79,10 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("--time", o->time,
                  "Time budget in seconds. pt/lt/bdpt: run work units (in index order) until the time is up "
                  "and develop with the samples actually taken (without --spp: up to 65536 spp, one sample "
-                 "per unit). Markov chains: chains not started when the time is up are dropped and the image "
-                 "is normalized by the mutations that ran (exact for pssmlt; for mmlt the per-length "
-                 "weights assume the planned allocation). A unit in progress always finishes.")
+                 "per unit; a unit in progress always finishes). Markov chains: bootstrap, measure the "
+                 "mutation throughput in a short trial (~7% of the budget, discarded), then choose "
+                 "--mutations-per-pixel to fill the rest and run every chain; the chosen value is printed "
+                 "and stored in the EXR (mutationsPerPixel): rendering with it reproduces the image exactly")
       ->check(CLI::NonNegativeNumber);
   auto* maxDepth = sub.add_option("--max-depth", o->maxDepth,
                                   "Maximum path length in segments (edges): 1 = directly visible emitters "
@@ -121,7 +139,7 @@ CommandRun setupRender(CLI::App& sub) {
     lo.showProgress = !o->quiet;
     lo.techniqueImages = o->techniqueImages;
     if (!o->inProcess && lo.defines.empty() && s.timeBudgetSeconds == 0 && !lo.techniqueImages)
-      renderWithLocalFarm(lo, o->workers > 0 ? o->workers : o->threads);
+      renderWithLocalFarmAndReport(lo, o->workers > 0 ? o->workers : o->threads);
     else
       renderLocal(lo);
     return 0;
