@@ -1,5 +1,7 @@
 // The `mltfarm` executable end to end: errors give exit code 2 and a message naming the file; a small
-// render writes an EXR (with metadata) and a PNG; the image does not depend on the thread count.
+// render writes an EXR (with metadata) and a PNG; the image does not depend on the thread count; a Markov
+// chain render prints its summary (b, acceptance, mutations/s); a time-budgeted one records the mutations
+// per pixel it chose, and rendering with that value reproduces the image bit for bit.
 // The executable is found next to this test's build directory (BUILD/tools/mltfarm).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -10,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
 
 #include "common/io/exr_io.h"
@@ -114,6 +117,79 @@ TEST_F(Cli, RenderWritesExrWithMetadataAndPngAndIsThreadCountIndependent) {
     sum += a.rgb[i].g;
   }
   EXPECT_GT(sum, 0.0);  // the light reaches the camera
+}
+
+bool sameBits(const ExrImage& a, const ExrImage& b) {
+  if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return false;
+  for (size_t i = 0; i < a.rgb.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      if (std::bit_cast<uint32_t>(a.rgb[i][c]) != std::bit_cast<uint32_t>(b.rgb[i][c])) return false;
+  return true;
+}
+
+const std::string kSmallMmlt = " --method mmlt --width 32 --height 32 --max-depth 4 --bootstrap 2000 --seed 5 "
+                               "--threads 2 --in-process ";
+
+TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
+  const fs::path out = tempDir() / "summary.exr";
+  const RunResult r = run("render " + kScenes + "cornell-box.xml" + kSmallMmlt + "--mutations-per-pixel 4 -o " +
+                          out.string());  // stderr is a pipe here, not a terminal
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const std::string number = "[0-9.e+-]+";
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("b = " + number + " ± " + number + " \\(rel\\. " + number +
+                                                     "%, 8000 bootstrap samples")))
+      << r.output;
+  for (int k = 1; k <= 4; ++k)  // the per-length table: k, b_k ± SE, chains, mutations, acceptance
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("\\n +" + std::to_string(k) + " +" + number + " ± " + number +
+                                                       " +[0-9]+ +[0-9]+ +" + number + "%")))
+        << "k = " << k << "\n" << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("acceptance " + number + "% \\(large steps " + number +
+                                                     "%, small steps " + number + "%\\)")))
+      << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("4096 mutations .* = " + number + " mutations/s"))) << r.output;
+  // 2000 candidates per length: b is uncertain by more than 2%.
+  EXPECT_NE(r.output.find("increase --bootstrap"), std::string::npos) << r.output;
+
+  const ExrImage img = readExr(out.string());
+  const auto& n = img.metadata.numbers;
+  for (const char* key : {"b", "bStdErr", "acceptance", "acceptanceLarge", "acceptanceSmall", "b1", "bStdErr4",
+                          "chains2", "mutations3", "acceptance4", "mutationsPerSecond"})
+    EXPECT_TRUE(n.count(key)) << key;
+  EXPECT_EQ(n.at("mutations"), 4096.0);
+  EXPECT_EQ(n.at("mutations1") + n.at("mutations2") + n.at("mutations3") + n.at("mutations4"), 4096.0);
+  EXPECT_GT(n.at("acceptance"), 0.0);
+  EXPECT_LT(n.at("acceptance"), 1.0);
+  EXPECT_GT(n.at("bStdErr"), 0.0);
+
+  // -q: no summary (the warning about b stays).
+  const RunResult quiet = run("render " + kScenes + "cornell-box.xml" + kSmallMmlt + "--mutations-per-pixel 4 -q -o " +
+                              out.string());
+  ASSERT_EQ(quiet.exitCode, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("mutations/s"), std::string::npos) << quiet.output;
+}
+
+TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel) {
+  const fs::path dir = tempDir();
+  const std::string scene = kScenes + "cornell-box.xml";
+  const RunResult timed = run("render " + scene + kSmallMmlt + "--time 0.5 -o " + (dir / "timed.exr").string());
+  ASSERT_EQ(timed.exitCode, 0) << timed.output;
+  const ExrImage a = readExr((dir / "timed.exr").string());
+  ASSERT_TRUE(a.metadata.numbers.count("mutationsPerPixel")) << timed.output;
+  const double mpp = a.metadata.numbers.at("mutationsPerPixel");
+  EXPECT_GT(mpp, 0.0);
+  EXPECT_EQ(a.metadata.numbers.at("workUnits"), a.metadata.numbers.at("workUnitsPlanned"));  // every chain ran
+  EXPECT_EQ(a.metadata.numbers.at("mutations"), std::round(mpp * 32 * 32));
+  // The printed value is the one to type: it reads back as the recorded double.
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(timed.output, match, std::regex("--mutations-per-pixel ([0-9.e+-]+)"))) << timed.output;
+  EXPECT_EQ(std::stod(match[1].str()), mpp) << timed.output;
+
+  const RunResult again = run("render " + scene + kSmallMmlt + "--mutations-per-pixel " + match[1].str() + " -q -o " +
+                              (dir / "again.exr").string());
+  ASSERT_EQ(again.exitCode, 0) << again.output;
+  const ExrImage b = readExr((dir / "again.exr").string());
+  EXPECT_EQ(b.metadata.numbers.at("mutationsPerPixel"), mpp);
+  EXPECT_TRUE(sameBits(a, b)) << "mutations per pixel " << match[1].str();
 }
 
 }  // namespace

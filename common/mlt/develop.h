@@ -22,9 +22,10 @@
 //     r_k = (b_k / M_k) / (b / M)                                               (D2)
 // so that b * P / M * r_k * splatSum_k = b_k * P / M_k * splatSum_k exactly, whatever the allocation.
 // Allocation apportions M_k proportionally to b_k (largest remainder), so r_k = 1 up to rounding of
-// one mutation; (D2) removes even that. A time-limited render that ran only some chains still develops
-// with the planned M (the chains are not stopped midway; units that never ran leave their lengths dark),
-// so the farm waits for every chain.
+// one mutation; (D2) removes even that. (D2) holds only for the planned M_k, so every planned chain must
+// run: the farm waits for every chain, and a time budget chooses M before planning (from a throughput
+// trial, tools/cli/render_local.cpp) instead of dropping chains. A preview of some chains develops with
+// the mutations merged (approximate for mmlt).
 //
 // ---- Direct illumination rendered separately (separateDirect) -------------------------------------
 // Paths of at most kDirectMaxSegments segments are rendered by bdpt (pixel samples + t = 1 splats) and

@@ -289,10 +289,9 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     std::string summary = formatChainSummary(*report, plan.norm.bootstrapSeconds, result.runSeconds);
     if (result.chainBudget)
       summary += fmt::format("time budget {} s: the trial measured {:.4g} mutations/s; chose {} mutations per pixel "
-                             "(render again with --mutations-per-pixel {} --seed {} for the same image)\n",
+                             "(the same settings with --mutations-per-pixel {} instead of --time give the same image)\n",
                              plan.settings.timeBudgetSeconds, result.chainBudget->mutationsPerSecond,
-                             result.chainBudget->mutationsPerPixel, result.chainBudget->mutationsPerPixel,
-                             plan.settings.seed);
+                             result.chainBudget->mutationsPerPixel, result.chainBudget->mutationsPerPixel);
     std::fputs(summary.c_str(), stderr);
   } else if (progress) {
     char line[512];
