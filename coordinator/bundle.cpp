@@ -43,10 +43,10 @@ void validateBundlePath(const std::string& path) {
   }
 }
 
-SceneBundle collectBundle(const std::string& sceneFile) {
+SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines) {
   SceneDesc desc;
   try {
-    desc = loadMitsubaScene(sceneFile);
+    desc = loadMitsubaScene(sceneFile, defines);
   } catch (const std::exception& e) {
     throw FarmError(FarmError::Code::InvalidArgument, e.what());
   }

@@ -16,7 +16,8 @@ struct SceneBundle {
 
 // Loads the scene (for its list of referenced files) and reads every file. Referenced files must lie
 // under the scene file's directory. Throws FarmError(InvalidArgument) with the loader's message.
-SceneBundle collectBundle(const std::string& sceneFile);
+// `defines`: the scene's -D parameters (they may name the referenced files).
+SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines = {});
 // Hex SHA-256 over the sorted (path, size, bytes) triples: the same value as sceneContentHash
 // (common/scene/scene_hash.h) for a scene whose files all lie under its directory.
 std::string bundleHash(const std::vector<BundleFile>& files);

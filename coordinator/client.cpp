@@ -84,7 +84,7 @@ FarmClient::~FarmClient() = default;
 JobStatus FarmClient::submit(const std::string& sceneFile, const wire::SubmittedSettings& settings, int priority,
                              const std::string& name, bool coordinatorPath) {
   if (!coordinatorPath) {
-    SceneBundle b = collectBundle(sceneFile);
+    SceneBundle b = collectBundle(sceneFile, settings.defines);
     return submitBundle(b.files, b.sceneFile, settings, priority, name.empty() ? sceneFile : name);
   }
   grpc::ClientContext ctx;

@@ -28,6 +28,7 @@ v1::JobStatus toProto(const JobStatus& s) {
   p.set_elapsed_seconds(s.elapsedSeconds);
   p.set_bootstrap_seconds(s.bootstrapSeconds);
   p.set_error(s.error);
+  p.set_failed_attempts(s.failedAttempts);
   return p;
 }
 
@@ -57,6 +58,7 @@ JobStatus fromProto(const v1::JobStatus& p) {
   s.elapsedSeconds = p.elapsed_seconds();
   s.bootstrapSeconds = p.bootstrap_seconds();
   s.error = p.error();
+  s.failedAttempts = p.failed_attempts();
   return s;
 }
 
@@ -69,6 +71,7 @@ v1::Lease toProto(const Lease& l) {
   p.set_unit_end(l.unitEnd);
   p.set_scene_hash(l.sceneHash);
   p.set_scene_file(l.sceneFile);
+  for (const auto& [name, value] : l.defines) (*p.mutable_defines())[name] = value;
   return p;
 }
 
@@ -83,6 +86,8 @@ Lease fromProto(const v1::Lease& p) {
   l.unitEnd = p.unit_end();
   l.sceneHash = p.scene_hash();
   l.sceneFile = p.scene_file();
+  l.defines.insert(p.defines().begin(), p.defines().end());
+  wire::validateDefines(l.defines, "Lease.defines");
   return l;
 }
 
@@ -95,6 +100,7 @@ SubmitRequest fromProto(const v1::SubmitHeader& h, std::vector<BundleFile> files
   r.hasMaxDepth = s.hasMaxDepth;
   r.hasRrDepth = s.hasRrDepth;
   r.hasSpp = s.hasSpp;
+  r.defines = s.defines;
   if (h.priority() < -1000 || h.priority() > 1000)
     throw wire::WireError("priority", std::to_string(h.priority()) + " is out of range [-1000, 1000]");
   r.priority = h.priority();

@@ -89,7 +89,9 @@ Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) 
     try {
       v1::RenderSettings ps;
       ps.ParseFromString(rec.settings);
-      RenderSettings s = wire::fromProto(ps).settings;
+      wire::SubmittedSettings sub = wire::fromProto(ps);
+      RenderSettings s = sub.settings;
+      job.defines = sub.defines;
       job.status.method = methodName(s.method);
       job.status.width = s.width;
       job.status.height = s.height;
@@ -109,6 +111,9 @@ Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) 
     if (j.plan && (state == JobState::Running || state == JobState::Merging || state == JobState::Done)) {
       startRunning(j);
       if (state != JobState::Done) j.status.state = j.status.tasksDone == j.tasks.size() ? JobState::Merging : JobState::Running;
+    } else if (j.plan && isTerminal(state)) {
+      startRunning(j);  // failed or cancelled: show what was accepted (it is kept), lease nothing
+      j.pending.clear();
     }
     refreshProgress(j);
     spdlog::info("job={} event=reloaded state={} tasks_done={}/{}", j.status.jobId, jobStateName(j.status.state),
@@ -153,6 +158,7 @@ void Coordinator::touch(Job& job) {
 void Coordinator::setState(Job& job, JobState s, const std::string& error) {
   job.status.state = s;
   if (!error.empty()) job.status.error = error;
+  if (isTerminal(s)) job.pending.clear();  // stop leasing; leases in flight are cancelled by heartbeats
   store_->updateState(job.rec.id, int(s), job.status.error);
   refreshProgress(job);
   touch(job);
@@ -163,6 +169,7 @@ void Coordinator::setState(Job& job, JobState s, const std::string& error) {
 void Coordinator::startRunning(Job& job) {
   job.tasks = splitTasks(*job.plan);
   job.taskState.assign(job.tasks.size(), TaskState::Pending);
+  job.attempts.assign(job.tasks.size(), 0);
   for (uint32_t t : store_->acceptedTasks(job.rec.id))
     if (t < job.taskState.size()) job.taskState[t] = TaskState::Accepted;
   job.pending.clear();
@@ -211,7 +218,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   // 1. The bundle: uploaded files, or collected from a path this process can read.
   SceneBundle bundle;
   if (!req.coordinatorPath.empty()) {
-    bundle = collectBundle(req.coordinatorPath);
+    bundle = collectBundle(req.coordinatorPath, req.defines);
   } else {
     if (req.bundle.empty()) throw FarmError(Code::InvalidArgument, "bundle: no scene files uploaded and no coordinator_path");
     for (const BundleFile& f : req.bundle) validateBundlePath(f.path);
@@ -236,7 +243,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
     if (ec) fs::remove_all(tmp);
   }
   // 2. Load and validate the scene exactly as the workers will.
-  SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string());
+  SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string(), req.defines);
   RenderSettings s = req.settings;
   resolveSettings(s, req.hasSize, req.hasMaxDepth, req.hasRrDepth, req.hasSpp, desc);
   const double pixels = double(s.width) * s.height;
@@ -255,7 +262,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   rec.name = req.name;
   rec.priority = req.priority;
   rec.state = int(JobState::Queued);
-  rec.settings = wire::toProto(s).SerializeAsString();
+  rec.settings = wire::toProto(wire::SubmittedSettings{s, true, true, true, true, req.defines}).SerializeAsString();
   rec.sceneHash = hash;
   rec.sceneFile = bundle.sceneFile;
   rec.submittedAt = unixNow();
@@ -269,6 +276,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   job.status.sceneHash = hash;
   job.status.width = s.width;
   job.status.height = s.height;
+  job.defines = req.defines;
   Job& j = jobs_.emplace(rec.id, std::move(job)).first->second;
   refreshProgress(j);
   spdlog::info("job={} event=submitted scene_hash={} scene={} method={} size={}x{} seed={} priority={}", j.status.jobId,
@@ -374,6 +382,7 @@ std::vector<Lease> Coordinator::lease(const std::string& workerId, int maxTasks)
       l.unitEnd = job->tasks[t].end;
       l.sceneHash = job->rec.sceneHash;
       l.sceneFile = job->rec.sceneFile;
+      l.defines = job->defines;
       leases_[l.leaseId] = {workerId, job->rec.id, t,
                             Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                std::chrono::duration<double>(opt_.leaseTimeoutSeconds))};
@@ -490,6 +499,52 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   return {true, "accepted"};
 }
 
+bool Coordinator::taskAttemptFailed(Job& job, uint32_t task, const std::string& reason) {
+  // Only a task that is still leased counts: a late report for a task that has meanwhile been accepted,
+  // requeued or re-leased elsewhere says nothing about the current attempt.
+  job.taskState[task] = TaskState::Pending;
+  const uint32_t n = ++job.attempts[task];
+  ++job.status.failedAttempts;
+  const TaskRange r = job.tasks[task];
+  if (job.status.state != JobState::Running) {
+    touch(job);
+    return false;
+  }
+  if (int(n) >= opt_.maxAttempts) {
+    spdlog::error("job={} task={} units={}-{} event=task_out_of_attempts attempts={} error=\"{}\"", job.status.jobId, task,
+                  r.begin, r.end - 1, n, reason);
+    setState(job, JobState::Failed,
+             fmt::format("task {} (work units {}-{}) failed {} times; last error: {}", task, r.begin, r.end - 1, n, reason));
+    return true;
+  }
+  job.pending.push_front(task);
+  spdlog::warn("job={} task={} units={}-{} event=requeued attempt={}/{} error=\"{}\"", job.status.jobId, task, r.begin,
+               r.end - 1, n, opt_.maxAttempts, reason);
+  touch(job);
+  return false;
+}
+
+FailureReply Coordinator::reportFailure(const std::string& workerId, const std::string& leaseId,
+                                        const std::string& jobId, uint32_t taskIndex, const std::string& message) {
+  std::lock_guard lock(mu_);
+  Job& job = findJob(jobId);
+  if (taskIndex >= job.tasks.size())
+    throw FarmError(Code::InvalidArgument,
+                    fmt::format("task_index: {} out of range [0, {})", taskIndex, job.tasks.size()));
+  auto it = leases_.find(leaseId);
+  if (it == leases_.end() || it->second.workerId != workerId || it->second.job != job.rec.id ||
+      it->second.task != taskIndex) {
+    spdlog::info("job={} task={} worker={} lease={} event=stale_failure_ignored error=\"{}\"", jobId, taskIndex,
+                 workerId, leaseId, message);
+    return {};
+  }
+  leases_.erase(it);
+  if (job.taskState[taskIndex] != TaskState::Leased) return {};
+  spdlog::warn("job={} task={} worker={} lease={} event=task_failed error=\"{}\"", jobId, taskIndex, workerId, leaseId,
+               message);
+  return {taskAttemptFailed(job, taskIndex, fmt::format("worker {}: {}", workerId, message))};
+}
+
 void Coordinator::returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) {
   std::lock_guard lock(mu_);
   for (const std::string& id : leaseIds) {
@@ -539,6 +594,7 @@ void Coordinator::plannerLoop() {
 void Coordinator::planOne(int64_t id) {
   std::string file, jobId;
   RenderSettings settings;
+  std::map<std::string, std::string> defines;
   {
     std::lock_guard lock(mu_);
     Job& job = jobs_.at(id);
@@ -548,12 +604,13 @@ void Coordinator::planOne(int64_t id) {
     v1::RenderSettings ps;
     ps.ParseFromString(job.rec.settings);
     settings = wire::fromProto(ps).settings;
+    defines = job.defines;
     jobId = job.status.jobId;
   }
   std::shared_ptr<JobPlan> plan;
   std::string error;
   try {
-    auto scene = buildRenderScene(loadSceneDesc(file), settings.width, settings.height);
+    auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
     spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, methodName(settings.method),
                  settings.bootstrapSamples);
     plan = std::make_shared<JobPlan>(planJob(*scene, settings));
@@ -628,11 +685,11 @@ void Coordinator::reaperLoop() {
       }
       auto job = jobs_.find(it->second.job);
       if (job != jobs_.end() && job->second.taskState[it->second.task] == TaskState::Leased) {
-        job->second.taskState[it->second.task] = TaskState::Pending;
-        if (job->second.status.state == JobState::Running) job->second.pending.push_front(it->second.task);
-        spdlog::warn("job={} task={} worker={} lease={} event=lease_expired requeued=true", job->second.status.jobId,
+        spdlog::warn("job={} task={} worker={} lease={} event=lease_expired", job->second.status.jobId,
                      it->second.task, it->second.workerId, it->first);
-        touch(job->second);
+        taskAttemptFailed(job->second, it->second.task,
+                          fmt::format("lease {} of worker {} expired (worker died or hung)", it->first,
+                                      it->second.workerId));
       }
       it = leases_.erase(it);
     }

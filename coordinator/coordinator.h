@@ -29,6 +29,7 @@ struct CoordinatorOptions {
   double heartbeatSeconds = 1.0;      // told to workers
   double leaseTimeoutSeconds = 10.0;  // a lease not renewed for this long is queued again
   bool keepPartials = false;          // also write STATE/jobs/<id>/partials/task-NNNN.exr
+  int maxAttempts = 3;                // a task that failed (report or lease expiry) this often fails its job
 };
 
 class Coordinator final : public ClientHandler, public WorkerHandler {
@@ -54,6 +55,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                      uint32_t taskIndex, PartialResult result) override;
   void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
+  FailureReply reportFailure(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
+                             uint32_t taskIndex, const std::string& message) override;
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -65,6 +68,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     std::vector<TaskRange> tasks;
     std::vector<TaskState> taskState;
     std::deque<uint32_t> pending;
+    std::vector<uint32_t> attempts;           // failed attempts per task (reports + lease expiries)
+    std::map<std::string, std::string> defines;  // scene parameters (Mitsuba -D)
     Clock::time_point renderStart;
     uint64_t workDoneAtStart = 0;  // accepted before this process started (for the ETA)
   };
@@ -84,6 +89,9 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   void refreshProgress(Job& job);
   void setState(Job& job, JobState s, const std::string& error = {});
   void startRunning(Job& job);             // plan known: build tasks, requeue the unaccepted ones
+  // A leased task's attempt failed: requeue it, or fail the job when it is out of attempts. Returns true
+  // if the job failed. Caller holds mu_.
+  bool taskAttemptFailed(Job& job, uint32_t task, const std::string& reason);
   std::string sceneDir(const std::string& hash) const;
   std::string jobDir(int64_t id) const;
   void plannerLoop();

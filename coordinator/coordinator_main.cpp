@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
   app.add_option("--heartbeat", opt.heartbeatSeconds, "heartbeat interval told to workers (seconds)")
       ->check(CLI::Range(0.05, 600.0))->capture_default_str();
   app.add_flag("--keep-partials", opt.keepPartials, "also write each accepted task as a partial EXR");
+  app.add_option("--max-attempts", opt.maxAttempts,
+                 "a task that failed this many times (worker error reports and expired leases) fails its job")
+      ->check(CLI::Range(1, 1000))->capture_default_str();
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results

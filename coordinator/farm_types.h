@@ -3,6 +3,7 @@
 // proto/convert.h.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -43,6 +44,7 @@ struct JobStatus {
   uint32_t unitsDone = 0, unitsTotal = 0, tasksDone = 0, tasksTotal = 0, leasedTasks = 0;
   double etaSeconds = -1, elapsedSeconds = 0, bootstrapSeconds = 0;
   std::string error;
+  uint32_t failedAttempts = 0;  // failure reports + lease expiries (since this coordinator started)
   uint64_t version = 0;  // bumped on every change (WatchJob waits on it); not sent
 };
 
@@ -55,6 +57,7 @@ struct BundleFile {
 struct SubmitRequest {
   RenderSettings settings;
   bool hasSize = false, hasMaxDepth = false, hasRrDepth = false, hasSpp = false;
+  std::map<std::string, std::string> defines;  // scene parameters (Mitsuba -D)
   int priority = 0;
   std::string name;
   // Either a bundle (sceneFile is its path inside the bundle) or a coordinator-readable path.
@@ -69,6 +72,7 @@ struct Lease {
   std::string leaseId, jobId;
   uint32_t taskIndex = 0, unitBegin = 0, unitEnd = 0;
   std::string sceneHash, sceneFile;
+  std::map<std::string, std::string> defines;  // the scene is loaded with these parameters
 };
 
 struct WorkerInfo {
@@ -85,6 +89,10 @@ struct Registration {
 struct HeartbeatReply {
   bool unknownWorker = false;
   std::vector<std::string> cancelledLeases;
+};
+
+struct FailureReply {
+  bool jobFailed = false;
 };
 
 struct UploadReply {

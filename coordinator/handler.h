@@ -36,6 +36,9 @@ class WorkerHandler {
   virtual UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                              uint32_t taskIndex, PartialResult result) = 0;
   virtual void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) = 0;
+  // A leased task failed on the worker: requeue it, or fail the job once the task is out of attempts.
+  virtual FailureReply reportFailure(const std::string& workerId, const std::string& leaseId,
+                                     const std::string& jobId, uint32_t taskIndex, const std::string& message) = 0;
 };
 
 }  // namespace mlt::farm

@@ -6,9 +6,9 @@
 
 namespace mlt::farm {
 
-SceneDesc loadSceneDesc(const std::string& path) {
+SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines) {
   try {
-    return loadMitsubaScene(path);
+    return loadMitsubaScene(path, defines);
   } catch (const std::exception& e) {
     throw FarmError(FarmError::Code::InvalidArgument, e.what());
   }

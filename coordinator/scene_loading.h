@@ -1,6 +1,7 @@
 // Loading a scene for the farm: the same code on the coordinator (validation, bootstrap) and the worker
 // (chains), so both build the identical RenderScene for a job.
 #pragma once
+#include <map>
 #include <memory>
 #include <string>
 
@@ -11,7 +12,8 @@
 namespace mlt::farm {
 
 // loadMitsubaScene; errors become FarmError(InvalidArgument) carrying the loader's message.
-SceneDesc loadSceneDesc(const std::string& path);
+// `defines` are the job's scene parameters (Mitsuba -D).
+SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines = {});
 // Fills what the client left to the scene: film size, max depth, rr depth.
 void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, bool hasSpp,
                      const SceneDesc& desc);

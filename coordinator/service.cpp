@@ -261,6 +261,17 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
     });
   }
 
+  Status ReportFailure(ServerContext* ctx, const v1::ReportFailureRequest* req, v1::ReportFailureResponse* resp) override {
+    return guarded(ctx, token_, "ReportFailure", [&] {
+      wire::checkVersion(req->format_version(), "ReportFailureRequest");
+      if (req->message().size() > 64 * 1024)
+        throw wire::WireError("message", fmt::format("{} bytes (at most 64 KiB)", req->message().size()));
+      FailureReply r = h_.reportFailure(req->worker_id(), req->lease_id(), req->job_id(), req->task_index(), req->message());
+      resp->set_job_failed(r.jobFailed);
+      return Status::OK;
+    });
+  }
+
   Status ReturnLeases(ServerContext* ctx, const v1::ReturnLeaseRequest* req, v1::ReturnLeaseResponse*) override {
     return guarded(ctx, token_, "ReturnLeases", [&] {
       wire::checkVersion(req->format_version(), "ReturnLeaseRequest");

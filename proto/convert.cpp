@@ -4,6 +4,7 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -48,10 +49,22 @@ void checkVersion(uint32_t version, const char* message) {
                     fmt::format("peer speaks format version {}, this build speaks {}", version, kFormatVersion));
 }
 
+void validateDefines(const std::map<std::string, std::string>& defines, const char* field) {
+  if (defines.size() > 256) throw WireError(field, fmt::format("{} defines (at most 256)", defines.size()));
+  for (const auto& [name, value] : defines) {
+    const bool ok = !name.empty() && name.size() <= 128 && std::all_of(name.begin(), name.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+    });
+    if (!ok) throw WireError(field, fmt::format("name '{}' must be 1-128 letters, digits or '_'", name));
+    if (value.size() > 4096 || value.find('\0') != std::string::npos)
+      throw WireError(field, fmt::format("value of '{}' is longer than 4096 bytes or contains NUL", name));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Settings
 // ---------------------------------------------------------------------------------------------
-v1::RenderSettings toProto(const RenderSettings& s) { return toProto(SubmittedSettings{s, true, true, true, true}); }
+v1::RenderSettings toProto(const RenderSettings& s) { return toProto(SubmittedSettings{s, true, true, true, true, {}}); }
 
 v1::RenderSettings toProto(const SubmittedSettings& sub) {
   const RenderSettings& s = sub.settings;
@@ -80,6 +93,7 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
   p.set_gaussian_sigma(s.gaussianSigma);
   p.set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value" : "kelemen-mis");
   p.set_separate_direct(s.separateDirect);
+  for (const auto& [name, value] : sub.defines) (*p.mutable_defines())[name] = value;
   return p;
 }
 
@@ -140,6 +154,8 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
   else if (p.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
   else throw WireError("settings.splatting", fmt::format("unknown '{}' (expected-value|kelemen-mis)", p.splatting()));
   s.separateDirect = p.separate_direct();
+  out.defines.insert(p.defines().begin(), p.defines().end());
+  validateDefines(out.defines, "settings.defines");
   return out;
 }
 

@@ -4,6 +4,7 @@
 // subcommands includes this header.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -38,7 +39,11 @@ void checkVersion(uint32_t version, const char* message);
 struct SubmittedSettings {
   RenderSettings settings;
   bool hasSize = false, hasMaxDepth = false, hasRrDepth = false, hasSpp = false;
+  std::map<std::string, std::string> defines;  // Mitsuba -D name=value (scene parameters)
 };
+// Throws WireError unless every define has a valid name (letters, digits, '_'; at most 128 characters)
+// and value (at most 4096 bytes, no NUL), and there are at most 256 of them.
+void validateDefines(const std::map<std::string, std::string>& defines, const char* field);
 v1::RenderSettings toProto(const SubmittedSettings& s);
 // Fully resolved settings (every flag set).
 v1::RenderSettings toProto(const RenderSettings& s);

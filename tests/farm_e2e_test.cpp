@@ -3,28 +3,50 @@
 // killed and restarted, and when the partial EXRs are merged offline.
 #include <gtest/gtest.h>
 
+#include "common/io/exr_io.h"
+#include "common/mlt/develop.h"
 #include "coordinator/merge.h"
 #include "tests/farm/farm_harness.h"
+
+#include <cmath>
+#include <cstring>
 
 namespace mlt::farm::test {
 namespace {
 
-// Renders the reference job (pssmlt, then bdpt) with `workers` worker processes; returns the two EXRs.
+// More work units than the 64 tasks a job is split into, so that tasks hold several units and the farm
+// sums them in another grouping than the in-process renderer (unit by unit).
+constexpr int kManyUnits = 96;
+wire::SubmittedSettings bdptJob() {
+  wire::SubmittedSettings s = tinySettings(Method::BDPT);
+  s.settings.spp = kManyUnits;  // one sample per unit
+  return s;
+}
+wire::SubmittedSettings mmltJob() {
+  wire::SubmittedSettings s = tinySettings(Method::MMLT);
+  s.settings.chains = kManyUnits;
+  return s;
+}
+
+// Renders the reference jobs (pssmlt, bdpt, mmlt) with `workers` worker processes; returns the EXRs.
 struct Rendered {
-  std::string mltExr, bdptExr;
+  std::string mltExr, bdptExr, mmltExr;
 };
 Rendered renderWith(Farm& farm, int workers, const std::string& tag) {
   farm.startCoordinator({"--keep-partials"});
   for (int i = 0; i < workers; ++i) farm.startWorker();
   auto c = farm.client();
   JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
-  JobStatus b = c.submit(cornellBox(), tinySettings(Method::BDPT));
+  JobStatus b = c.submit(cornellBox(), bdptJob());
+  JobStatus m = c.submit(cornellBox(), mmltJob());
   EXPECT_EQ(a.jobId, "job-1");
   EXPECT_EQ(farm.waitDone(a.jobId).state, JobState::Done);
   EXPECT_EQ(farm.waitDone(b.jobId).state, JobState::Done);
-  Rendered r{farm.dir / (tag + "-mlt.exr"), farm.dir / (tag + "-bdpt.exr")};
+  EXPECT_EQ(farm.waitDone(m.jobId).state, JobState::Done);
+  Rendered r{farm.dir / (tag + "-mlt.exr"), farm.dir / (tag + "-bdpt.exr"), farm.dir / (tag + "-mmlt.exr")};
   c.fetch(a.jobId, r.mltExr);
   c.fetch(b.jobId, r.bdptExr);
+  c.fetch(m.jobId, r.mmltExr);
   return r;
 }
 
@@ -48,12 +70,67 @@ TEST_F(FarmE2E, OneAndThreeWorkersGiveByteIdenticalImages) {
   ASSERT_GT(one.size(), 1000u);
   EXPECT_EQ(one, readFile(three.mltExr)) << "pssmlt image depends on the worker count";
   EXPECT_EQ(readFile(ref_.bdptExr), readFile(three.bdptExr)) << "bdpt image depends on the worker count";
+  EXPECT_EQ(readFile(ref_.mmltExr), readFile(three.mmltExr)) << "mmlt image depends on the worker count";
   // The three workers really shared the work.
   int workersThatUploaded = 0;
   for (size_t i = 0; i < farm.workers.size(); ++i)
     workersThatUploaded += countOccurrences(readFile(farm.dir / ("worker-" + std::to_string(i) + ".log")),
                                             "event=uploaded") > 0;
   EXPECT_GE(workersThatUploaded, 2);
+}
+
+// `mltfarm render --in-process` merges unit by unit, the farm task by task: the pixels are the same bits
+// (every unit's sums are quantized, common/job/sample_job.h and common/mlt/develop.h). The files differ
+// only in metadata (the farm's job id, the in-process run's wall time), so the pixels are compared.
+TEST_F(FarmE2E, InProcessRenderGivesTheSamePixelsAsTheFarm) {
+  struct Case {
+    const char* method;
+    std::string farmExr;
+    int spp, chains;
+  };
+  for (const Case& k : {Case{"bdpt", ref_.bdptExr, kManyUnits, 24}, Case{"mmlt", ref_.mmltExr, 8, kManyUnits},
+                        Case{"pssmlt", ref_.mltExr, 8, 24}}) {
+    const char* method = k.method;
+    const std::string& farmExr = k.farmExr;
+    const std::string out = reference_->dir / (std::string("inprocess-") + method + ".exr");
+    ChildProcess cli({toolsDir() + "/mltfarm", "render", cornellBox(), "-o", out, "--in-process", "-q", "-m", method,
+                      "--seed", "7", "--width", "32", "--height", "32", "--spp", std::to_string(k.spp),
+                      "--samples-per-unit", "1", "--mutations-per-pixel", "8", "--chains", std::to_string(k.chains),
+                      "--bootstrap", "4000", "--max-depth", "4", "--threads", "2"},
+                     reference_->dir / (std::string("inprocess-") + method + ".log"), false);
+    ASSERT_EQ(cli.wait(std::chrono::seconds(120)), 0) << method;
+    const ExrImage local = readExr(out), farm = readExr(farmExr);
+    ASSERT_EQ(local.width, farm.width);
+    ASSERT_EQ(local.height, farm.height);
+    ASSERT_EQ(local.metadata.numbers.at("workUnits"), farm.metadata.numbers.at("workUnits")) << method;
+    if (k.spp == kManyUnits || k.chains == kManyUnits)  // tasks really group several units
+      EXPECT_LT(farm.metadata.numbers.at("farm.tasks"), farm.metadata.numbers.at("workUnits")) << method;
+    EXPECT_EQ(std::memcmp(local.rgb.data(), farm.rgb.data(), local.rgb.size() * sizeof(Color)), 0)
+        << method << ": in-process pixels differ from the farm's";
+    double sum = 0;
+    for (const Color& c : local.rgb) sum += c.r + c.g + c.b;
+    EXPECT_GT(sum, 0.0) << method;
+  }
+}
+
+// What makes the grouping irrelevant: every partial film the farm accepted for bdpt (tasks of one or two
+// sample units) holds sums that are multiples of 2^-kQuantumExp, so adding them is exact in double. (The
+// developed floats above rarely show a grouping difference even without it: this checks the sums.)
+TEST_F(FarmE2E, BdptPartialSumsAreQuantized) {
+  size_t parts = 0, nonZero = 0;
+  for (auto& e : fs::directory_iterator(reference_->stateDir + "/jobs/job-2/partials")) {
+    const PartialExr p = readPartialExr(e.path().string());
+    ASSERT_EQ(p.plan.settings.method, Method::BDPT);
+    ++parts;
+    for (size_t i = 0; i < p.result.film.pixelCount(); ++i)
+      for (double v : {p.result.film.pixelSums()[i].r, p.result.film.pixelSums()[i].g, p.result.film.splatSums()[i].b}) {
+        nonZero += v != 0;
+        const double scaled = std::ldexp(v, kQuantumExp);
+        ASSERT_EQ(scaled, std::floor(scaled)) << e.path() << ": sum " << v << " is not a multiple of 2^-" << kQuantumExp;
+      }
+  }
+  EXPECT_EQ(parts, 64u);
+  EXPECT_GT(nonZero, 1000u);
 }
 
 TEST_F(FarmE2E, OfflineMergeOfPartialExrsGivesTheSameBytes) {
@@ -149,7 +226,7 @@ TEST_F(FarmE2E, CoordinatorKilledAndRestartedResumesWithoutRecomputing) {
   farm.startWorker(1, {"--debug-task-delay-ms", "40"});
   auto c = farm.client();
   JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
-  JobStatus b = c.submit(cornellBox(), tinySettings(Method::BDPT));
+  JobStatus b = c.submit(cornellBox(), bdptJob());
   JobStatus before = farm.waitFor(a.jobId, [](const JobStatus& s) { return s.tasksDone >= 3; });
   ASSERT_EQ(before.state, JobState::Running) << "job finished before the kill; make it longer";
   farm.coordinator->process.signal(SIGKILL);
@@ -176,7 +253,9 @@ TEST_F(FarmE2E, CoordinatorKilledAndRestartedResumesWithoutRecomputing) {
     for (std::string l; std::getline(lines, l);)
       acceptedAfter += l.find("job=" + job + " task=") != std::string::npos && l.find("event=accepted") != std::string::npos;
     EXPECT_EQ(acceptedAfter, total - done) << job << ": " << line;
-    if (job == a.jobId) EXPECT_GE(done, 3u);
+    if (job == a.jobId) {
+      EXPECT_GE(done, 3u);
+    }
   }
 }
 

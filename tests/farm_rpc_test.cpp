@@ -143,6 +143,10 @@ class RecordingHandler final : public WorkerHandler, public ClientHandler {
     return {true, "ok"};
   }
   void returnLeases(const std::string&, const std::vector<std::string>&) override {}
+  FailureReply reportFailure(const std::string&, const std::string&, const std::string&, uint32_t,
+                             const std::string&) override {
+    return {};
+  }
   JobStatus submit(SubmitRequest) override { throw FarmError(FarmError::Code::Internal, "fake"); }
   JobStatus get(const std::string&) override { throw FarmError(FarmError::Code::NotFound, "fake"); }
   JobStatus waitForChange(const std::string&, uint64_t, std::chrono::milliseconds) override { return {}; }

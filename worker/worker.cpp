@@ -137,7 +137,8 @@ std::shared_ptr<const JobPlan> Worker::planFor(const std::string& jobId) {
 }
 
 std::shared_ptr<const RenderScene> Worker::sceneFor(const Lease& l, const JobPlan& plan) {
-  const std::string key = fmt::format("{}@{}x{}", l.sceneHash, plan.settings.width, plan.settings.height);
+  std::string key = fmt::format("{}@{}x{}", l.sceneHash, plan.settings.width, plan.settings.height);
+  for (const auto& [name, value] : l.defines) key += fmt::format("|{}={}", name, value);
   std::shared_ptr<SceneEntry> entry;
   {
     std::lock_guard lock(mu_);
@@ -158,7 +159,7 @@ std::shared_ptr<const RenderScene> Worker::sceneFor(const Lease& l, const JobPla
     if (ec) fs::remove_all(tmp);
     spdlog::info("event=scene_cached scene_hash={} files={}", l.sceneHash.substr(0, 12), files.size());
   }
-  SceneDesc desc = loadSceneDesc((dir / l.sceneFile).string());
+  SceneDesc desc = loadSceneDesc((dir / l.sceneFile).string(), l.defines);
   entry->scene = buildRenderScene(std::move(desc), plan.settings.width, plan.settings.height);
   return entry->scene;
 }
@@ -175,6 +176,8 @@ void Worker::runTask(Active* a) {
     auto scene = sceneFor(l, *plan);
     for (int slept = 0; slept < opt_.taskDelayMs && !a->cancel; slept += 10)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (opt_.failUnit >= int64_t(l.unitBegin) && opt_.failUnit < int64_t(l.unitEnd))
+      throw std::runtime_error(fmt::format("debug: work unit {} fails on purpose (--debug-fail-unit)", opt_.failUnit));
     const auto t0 = std::chrono::steady_clock::now();
     PartialResult result;
     if (!farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel)) {
@@ -201,8 +204,27 @@ void Worker::runTask(Active* a) {
   } catch (const std::exception& e) {
     spdlog::error("worker={} job={} task={} lease={} event=task_failed error=\"{}\"", workerId, l.jobId, l.taskIndex,
                   l.leaseId, e.what());
+    // A coordinator that cannot be reached gets no report: the lease expires there and is counted then.
+    const auto* rpc = dynamic_cast<const RpcError*>(&e);
+    if (!a->cancel && !(rpc && transient(rpc->code()))) reportFailure(l, workerId, e.what());
   }
   a->finished = true;
+}
+
+void Worker::reportFailure(const Lease& l, const std::string& workerId, const std::string& message) {
+  grpc::ClientContext ctx;
+  prepareContext(ctx, opt_.coordinator, std::chrono::seconds(10));
+  v1::ReportFailureRequest req;
+  req.set_format_version(wire::kFormatVersion);
+  req.set_worker_id(workerId);
+  req.set_lease_id(l.leaseId);
+  req.set_job_id(l.jobId);
+  req.set_task_index(l.taskIndex);
+  req.set_message(message.substr(0, 60 * 1024));
+  v1::ReportFailureResponse resp;
+  grpc::Status s = stub_->ReportFailure(&ctx, req, &resp);
+  spdlog::info("worker={} job={} task={} lease={} event=failure_reported ok={} job_failed={}", workerId, l.jobId,
+               l.taskIndex, l.leaseId, s.ok(), resp.job_failed());
 }
 
 void Worker::reapFinished() {

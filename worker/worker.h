@@ -27,6 +27,7 @@ struct WorkerOptions {
   std::string cacheDir;     // scene bundles by hash; default $TMPDIR/mltfarm-worker-cache
   bool drain = false;       // on stop: finish the tasks in hand instead of returning them
   int taskDelayMs = 0;      // tests only: hold each lease this long before running it
+  int64_t failUnit = -1;    // tests only: a task holding this work unit throws instead of running
 };
 
 class Worker {
@@ -54,6 +55,7 @@ class Worker {
   void runTask(Active* a);
   std::shared_ptr<const JobPlan> planFor(const std::string& jobId);
   std::shared_ptr<const RenderScene> sceneFor(const Lease& l, const JobPlan& plan);
+  void reportFailure(const Lease& l, const std::string& workerId, const std::string& message);
   void reapFinished();
   void backoff(int& attempt);
 

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   app.add_flag("--drain", opt.drain, "on SIGTERM finish the tasks in hand instead of returning them");
   app.add_option("--debug-task-delay-ms", opt.taskDelayMs, "tests: hold each lease this long before running it")
       ->group("");  // hidden
+  app.add_option("--debug-fail-unit", opt.failUnit, "tests: a task holding this work unit fails (throws)")
+      ->group("");  // hidden
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results

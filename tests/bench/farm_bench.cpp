@@ -94,6 +94,10 @@ class NullHandler final : public WorkerHandler {
     return {true, ""};
   }
   void returnLeases(const std::string&, const std::vector<std::string>&) override {}
+  FailureReply reportFailure(const std::string&, const std::string&, const std::string&, uint32_t,
+                             const std::string&) override {
+    return {};
+  }
 };
 class NoClients final : public ClientHandler {
  public:

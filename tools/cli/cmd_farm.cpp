@@ -4,9 +4,13 @@
 //   mltfarm watch JOB --coordinator ADDR        mltfarm cancel JOB --coordinator ADDR
 //   mltfarm fetch JOB -o OUT.exr [--png OUT.png] --coordinator ADDR
 // --coordinator defaults to $MLTFARM_COORDINATOR, else 127.0.0.1:50051; --token to $MLTFARM_TOKEN.
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
+#include <stdexcept>
 
 #include "coordinator/client.h"
 #include "tools/cli/commands.h"
@@ -31,8 +35,19 @@ struct Connection {
 
 void printStatus(const JobStatus& s) { std::printf("%s\n", farm::describeStatus(s).c_str()); }
 
+// What a watcher cares about: a line is printed only when one of these changes (not for ETA or
+// elapsed-time ticks alone).
+std::string watchKey(const JobStatus& s) {
+  return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", int(s.state), s.phase, s.tasksDone, s.unitsDone, s.workDone,
+                     s.leasedTasks, s.b, s.failedAttempts, s.error);
+}
+
 int watchToEnd(FarmClient& client, const std::string& jobId) {
-  JobStatus last = client.watch(jobId, [](const JobStatus& s) {
+  std::string printed;
+  JobStatus last = client.watch(jobId, [&printed](const JobStatus& s) {
+    const std::string key = watchKey(s);
+    if (key == printed) return;
+    printed = key;
     std::fprintf(stderr, "%s\n", farm::describeStatus(s).c_str());
   });
   return last.state == farm::JobState::Done ? 0 : kExitError;
@@ -42,6 +57,7 @@ int watchToEnd(FarmClient& client, const std::string& jobId) {
 struct SubmitOptions {
   Connection conn;
   std::string scene, method = "bdpt", name, out, png;
+  std::vector<std::string> defines;
   int spp = 16, samplesPerUnit = 0, width = 0, height = 0, maxDepth = 5, rrDepth = 5, chains = 0,
       bootstrap = 100000, priority = 0;
   double mutationsPerPixel = 16;
@@ -68,6 +84,7 @@ CommandRun setupSubmit(CLI::App& sub) {
   auto* height = sub.add_option("--height", o->height, "Film height (default: the scene's)");
   sub.add_option("--priority", o->priority, "Higher runs first; FIFO within a priority")->capture_default_str();
   sub.add_option("--name", o->name, "Name shown in listings");
+  sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
   sub.add_flag("--path", o->path, "Send the scene's path instead of its files (the coordinator must read it)");
   sub.add_flag("--watch", o->watch, "Follow progress until the job ends");
   sub.add_option("-o,--output", o->out, "With --watch: fetch the EXR here when done");
@@ -90,6 +107,11 @@ CommandRun setupSubmit(CLI::App& sub) {
     s.settings.integrator.maxDepth = o->maxDepth;
     s.hasRrDepth = rrDepth->count() > 0;
     s.settings.integrator.rrDepth = o->rrDepth;
+    for (const std::string& d : o->defines) {
+      const size_t eq = d.find('=');
+      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--define '" + d + "': expected name=value");
+      s.defines[d.substr(0, eq)] = d.substr(eq + 1);
+    }
     FarmClient client(o->conn.channel);
     JobStatus st = client.submit(o->scene, s, o->priority, o->name, o->path);
     std::printf("%s\n", st.jobId.c_str());

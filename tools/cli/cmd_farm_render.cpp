@@ -12,8 +12,8 @@
 namespace mlt::cli {
 
 void renderWithLocalFarm(const LocalRenderOptions& o, int workers) {
-  if (!o.defines.empty() || o.settings.timeBudgetSeconds > 0 || o.techniqueImages)
-    throw std::invalid_argument("--define, --time and --technique-images need --in-process");
+  if (o.settings.timeBudgetSeconds > 0 || o.techniqueImages)
+    throw std::invalid_argument("--time and --technique-images need --in-process");
   if (!o.outExr.empty()) {  // fail before rendering, not after
     const std::filesystem::path dir = std::filesystem::absolute(o.outExr).parent_path();
     if (!std::filesystem::is_directory(dir))
@@ -28,6 +28,7 @@ void renderWithLocalFarm(const LocalRenderOptions& o, int workers) {
   e.settings.hasMaxDepth = o.maxDepth.has_value();
   e.settings.hasRrDepth = o.rrDepth.has_value();
   e.settings.hasSpp = o.sppGiven;
+  e.settings.defines = o.defines;  // applied by the coordinator and every worker
   e.workers = workers;
   e.outExr = o.outExr;
   const std::string png = o.outPng.empty() ? pngPathFor(o.outExr) : o.outPng;

@@ -104,7 +104,7 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
   sub.add_flag("--in-process,!--farm", o->inProcess,
                "Render in this process instead of the local farm (a coordinator and worker processes on "
-               "loopback, the default). --define, --time and --technique-images always render in-process");
+               "loopback, the default). --time and --technique-images always render in-process");
   sub.add_option("-w,--workers", o->workers,
                  "Local farm: worker processes (default: --threads, else every core)")
       ->check(CLI::NonNegativeNumber);
@@ -138,7 +138,7 @@ CommandRun setupRender(CLI::App& sub) {
     lo.exposureStops = o->exposure;
     lo.showProgress = !o->quiet;
     lo.techniqueImages = o->techniqueImages;
-    if (!o->inProcess && lo.defines.empty() && s.timeBudgetSeconds == 0 && !lo.techniqueImages)
+    if (!o->inProcess && s.timeBudgetSeconds == 0 && !lo.techniqueImages)
       renderWithLocalFarmAndReport(lo, o->workers > 0 ? o->workers : o->threads);
     else
       renderLocal(lo);
