@@ -86,6 +86,8 @@ TEST_F(Cli, UsageErrorsAreRejected) {
   EXPECT_NE(run("render " + kScenes + "cornell-box.xml --method nonsense -o /tmp/x.exr").exitCode, 0);
   EXPECT_NE(run("render " + kScenes + "cornell-box.xml --spp 0 -o /tmp/x.exr").exitCode, 0);
   EXPECT_NE(run("render " + kScenes + "cornell-box.xml --spp 1").exitCode, 0);  // no -o
+  EXPECT_NE(run("render " + kScenes + "cornell-box.xml --method mmlt --kernel nonsense -o /tmp/x.exr").exitCode, 0);
+  EXPECT_NE(run("render " + kScenes + "cornell-box.xml --method mmlt --splatting nonsense -o /tmp/x.exr").exitCode, 0);
   const RunResult help = run("render --help");
   EXPECT_EQ(help.exitCode, 0);
   EXPECT_NE(help.output.find("segments"), std::string::npos) << help.output;
@@ -189,6 +191,7 @@ TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel)
   ASSERT_EQ(again.exitCode, 0) << again.output;
   const ExrImage b = readExr((dir / "again.exr").string());
   EXPECT_EQ(b.metadata.numbers.at("mutationsPerPixel"), mpp);
+  EXPECT_EQ(b.metadata.strings.at("kernel"), "kelemen");
   EXPECT_TRUE(sameBits(a, b)) << "mutations per pixel " << match[1].str();
 }
 

@@ -226,6 +226,10 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   addChainMetadata(r, m);
   const ChainReport back = chainReportFromMetadata(m);
   EXPECT_EQ(formatChainSummary(back, 1.5, 2.5), formatChainSummary(r, 1.5, 2.5));
+  EXPECT_EQ(back.settings.largeStepProb, plan.settings.largeStepProb);
+  EXPECT_EQ(back.settings.kelemenS1, plan.settings.kelemenS1);
+  EXPECT_EQ(m.strings.at("kernel"), "kelemen");
+  EXPECT_EQ(m.strings.at("splatting"), "expected-value");
   const std::string text = formatChainSummary(r, 1.5, 2.5);
   EXPECT_NE(text.find("b = "), std::string::npos) << text;
   EXPECT_NE(text.find("acceptance"), std::string::npos) << text;

@@ -36,6 +36,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   const Normalization& norm = plan.norm;
   ChainReport r;
   r.method = methodName(s.method);
+  r.settings = s;
   r.b = norm.b;
   r.bStdErr = norm.bStdErr;
   r.bootstrapSamples = norm.bootstrapSamples;
@@ -86,6 +87,17 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["acceptanceSmall"] = r.acceptanceSmall;
   m.numbers["largeSteps"] = double(r.largeSteps);
   m.numbers["smallSteps"] = double(r.smallSteps);
+  const RenderSettings& s = r.settings;
+  m.numbers["largeStepProb"] = s.largeStepProb;
+  m.numbers["separateDirect"] = s.separateDirect ? 1 : 0;
+  m.strings["kernel"] = s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen";
+  if (s.kernel == MutationKernel::Gaussian) {
+    m.numbers["kernelSigma"] = s.gaussianSigma;
+  } else {
+    m.numbers["kernelS1"] = s.kelemenS1;
+    m.numbers["kernelS2"] = s.kelemenS2;
+  }
+  m.strings["splatting"] = s.splatting == MltSplatting::KelemenMIS ? "kelemen-mis" : "expected-value";
   for (const ChainLengthReport& l : r.lengths) {
     const std::string k = std::to_string(l.k);
     m.numbers["b" + k] = l.bk;
@@ -111,6 +123,17 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.acceptanceSmall = number(m, "acceptanceSmall");
   r.largeSteps = uint64_t(number(m, "largeSteps"));
   r.smallSteps = uint64_t(number(m, "smallSteps"));
+  if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
+  r.settings.separateDirect = number(m, "separateDirect") != 0;
+  if (const auto it = m.strings.find("kernel"); it != m.strings.end() && it->second == "gaussian") {
+    r.settings.kernel = MutationKernel::Gaussian;
+    r.settings.gaussianSigma = float(number(m, "kernelSigma"));
+  } else if (m.numbers.count("kernelS1")) {
+    r.settings.kelemenS1 = float(number(m, "kernelS1"));
+    r.settings.kelemenS2 = float(number(m, "kernelS2"));
+  }
+  if (const auto it = m.strings.find("splatting"); it != m.strings.end() && it->second == "kelemen-mis")
+    r.settings.splatting = MltSplatting::KelemenMIS;
   for (const auto& [key, value] : m.numbers) {
     const int k = lengthOfKey(key, "b");
     const std::string ks = std::to_string(k);

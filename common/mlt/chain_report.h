@@ -7,7 +7,9 @@
 // Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
 //   b, bStdErr, bootstrapSamples, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, acceptanceLarge, acceptanceSmall,
-//   largeSteps, smallSteps; mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
+//   largeSteps, smallSteps, largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
+//   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
+// Strings: kernel ("kelemen" | "gaussian"), splatting ("expected-value" | "kelemen-mis").
 #pragma once
 #include <cstdint>
 #include <string>
@@ -39,6 +41,7 @@ struct ChainReport {
   double acceptance = 0, acceptanceLarge = 0, acceptanceSmall = 0;
   uint64_t largeSteps = 0, smallSteps = 0;
   std::vector<ChainLengthReport> lengths;  // mmlt only, ascending k
+  RenderSettings settings;                 // the chain settings recorded with the report (not all of them)
   double relativeStdErr() const { return b > 0 ? bStdErr / b : 0.0; }
 };
 

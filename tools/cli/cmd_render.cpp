@@ -21,6 +21,9 @@ struct RenderCliOptions {
   double mutationsPerPixel = 16, time = 0;
   int chains = 0, bootstrap = 100000;
   float largeStep = 0.3f, exposure = 0;
+  std::string kernel = "kelemen", splatting = "expected-value";
+  float s1 = 1.0f / 1024, s2 = 1.0f / 64, sigma = 0.01f;
+  bool separateDirect = false;
   uint64_t seed = 1;
   std::vector<std::string> defines;
   bool inProcess = false, quiet = false, techniqueImages = false;
@@ -76,6 +79,21 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--kernel", o->kernel,
+                 "Markov chain methods: small-step kernel, kelemen (exponential, --s1/--s2) or gaussian (--sigma)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"kelemen", "gaussian"}));
+  sub.add_option("--s1", o->s1, "Kelemen kernel: smallest step")->check(CLI::PositiveNumber);
+  sub.add_option("--s2", o->s2, "Kelemen kernel: largest step")->check(CLI::PositiveNumber);
+  sub.add_option("--sigma", o->sigma, "Gaussian kernel: standard deviation")->check(CLI::PositiveNumber);
+  sub.add_option("--splatting", o->splatting,
+                 "Markov chain methods: expected-value (Veach: proposal weighted by a, current state by 1 - a) "
+                 "or kelemen-mis (Kelemen et al.'s large-step MIS weights)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
+  sub.add_flag("--separate-direct", o->separateDirect,
+               "pssmlt-bdpt, mmlt: render paths of up to 2 segments by bdpt (--spp samples) and let the chains do "
+               "only the longer ones (Veach's refinement)");
   sub.add_option("--time", o->time,
                  "Time budget in seconds. pt/lt/bdpt: run work units (in index order) until the time is up "
                  "and develop with the samples actually taken (without --spp: up to 65536 spp, one sample "
@@ -128,6 +146,12 @@ CommandRun setupRender(CLI::App& sub) {
     s.chains = o->chains;
     s.bootstrapSamples = o->bootstrap;
     s.largeStepProb = o->largeStep;
+    s.kernel = o->kernel == "gaussian" ? MutationKernel::Gaussian : MutationKernel::Kelemen;
+    s.kelemenS1 = o->s1;
+    s.kelemenS2 = o->s2;
+    s.gaussianSigma = o->sigma;
+    s.splatting = o->splatting == "kelemen-mis" ? MltSplatting::KelemenMIS : MltSplatting::ExpectedValue;
+    s.separateDirect = o->separateDirect;
     s.timeBudgetSeconds = o->time;
     if (maxDepth->count()) lo.maxDepth = o->maxDepth;
     if (rrDepth->count()) lo.rrDepth = o->rrDepth;

@@ -260,7 +260,6 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   if (chains) {
     report = makeChainReport(plan, result.merged);
     addChainMetadata(*report, m);
-    m.numbers["largeStepProb"] = plan.settings.largeStepProb;
     m.numbers["bootstrapSeconds"] = plan.norm.bootstrapSeconds;
     m.numbers["chainSeconds"] = result.runSeconds;
     m.numbers["mutationsPerSecond"] = double(result.merged.samples) / std::max(result.runSeconds, 1e-9);
