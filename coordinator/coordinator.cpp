@@ -356,12 +356,25 @@ Registration Coordinator::registerWorker(const WorkerInfo& info) {
 }
 
 std::vector<Lease> Coordinator::lease(const std::string& workerId, int maxTasks) {
-  std::lock_guard lock(mu_);
+  std::unique_lock lock(mu_);
   auto w = workers_.find(workerId);
   if (w == workers_.end())
     throw FarmError(Code::FailedPrecondition, fmt::format("worker_id: unknown worker '{}': register again", workerId));
   w->second.lastSeen = Clock::now();
-  if (stopping_) return {};
+  // Long poll: with nothing to lease, wait (up to leaseWaitSeconds) for work to appear (a plan finished,
+  // a task requeued) instead of letting the worker poll: an idle worker starts within milliseconds.
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(opt_.leaseWaitSeconds));
+  std::vector<Lease> out;
+  while (!stopping_) {
+    out = leaseNow(workerId, maxTasks);
+    if (!out.empty() || Clock::now() >= until) break;
+    changed_.wait_until(lock, until);
+  }
+  return out;
+}
+
+std::vector<Lease> Coordinator::leaseNow(const std::string& workerId, int maxTasks) {
   // FIFO within priorities: higher priority first, then submission order (= id order).
   std::vector<Job*> running;
   for (auto& [id, job] : jobs_)

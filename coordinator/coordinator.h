@@ -29,7 +29,8 @@ struct CoordinatorOptions {
   double heartbeatSeconds = 1.0;      // told to workers
   double leaseTimeoutSeconds = 10.0;  // a lease not renewed for this long is queued again
   bool keepPartials = false;          // also write STATE/jobs/<id>/partials/task-NNNN.exr
-  int maxAttempts = 3;                // a task that failed (report or lease expiry) this often fails its job
+  int maxAttempts = 3;
+  double leaseWaitSeconds = 1.0;      // LeaseWork long-polls this long when there is nothing to lease                // a task that failed (report or lease expiry) this often fails its job
 };
 
 class Coordinator final : public ClientHandler, public WorkerHandler {
@@ -92,6 +93,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   // A leased task's attempt failed: requeue it, or fail the job when it is out of attempts. Returns true
   // if the job failed. Caller holds mu_.
   bool taskAttemptFailed(Job& job, uint32_t task, const std::string& reason);
+  std::vector<Lease> leaseNow(const std::string& workerId, int maxTasks);  // caller holds mu_
   std::string sceneDir(const std::string& hash) const;
   std::string jobDir(int64_t id) const;
   void plannerLoop();

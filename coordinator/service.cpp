@@ -186,7 +186,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       if (req->max_tasks() < 1 || req->max_tasks() > 4096)
         throw wire::WireError("max_tasks", fmt::format("{} is out of range [1, 4096]", req->max_tasks()));
       for (const Lease& l : h_.lease(req->worker_id(), req->max_tasks())) *resp->add_leases() = toProto(l);
-      if (resp->leases().empty()) resp->set_retry_after_seconds(0.2);
+      if (resp->leases().empty()) resp->set_retry_after_seconds(0.02);  // the handler already long-polled
       return Status::OK;
     });
   }

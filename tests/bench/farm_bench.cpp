@@ -7,6 +7,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -29,11 +30,13 @@ wire::SubmittedSettings benchSettings() {
   wire::SubmittedSettings s;
   s.settings.method = Method::PSSMLT;
   s.settings.seed = 3;
-  s.settings.width = s.settings.height = 96;
+  // A few seconds on 2 cores, so that fixed costs (scene loading on each side, process hand-offs,
+  // fetching the result) are measured against real work rather than being the whole story.
+  s.settings.width = s.settings.height = 128;
   s.hasSize = true;
-  s.settings.mutationsPerPixel = 64;
-  s.settings.chains = 32;
-  s.settings.bootstrapSamples = 20000;
+  s.settings.mutationsPerPixel = 256;
+  s.settings.chains = 64;
+  s.settings.bootstrapSamples = 100000;
   s.settings.integrator.maxDepth = 5;
   s.hasMaxDepth = true;
   return s;
@@ -42,6 +45,7 @@ const std::string kScene = std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-bo
 
 struct Figures {
   double inProcess = 0, farm = 0, startup = 0, bootstrap = 0;
+  double uploadJobFilm = 0, uploadHd = 0, jobFilmMiB = 0, hdMiB = 0;
 };
 Figures gFigures;
 
@@ -121,12 +125,22 @@ void BM_FilmUpload(benchmark::State& state) {
   PartialResult r;
   r.film = Film(int(state.range(0)), int(state.range(1)));
   r.units = {0};
+  double best = 1e30;
   for (auto _ : state) {
     const auto t0 = Clock::now();
     uploadPartial(*stub, co, {"w", "l", "job-1", 0}, r);
-    state.SetIterationTime(since(t0));
+    const double seconds = since(t0);
+    best = std::min(best, seconds);
+    state.SetIterationTime(seconds);
   }
   const double mib = double(wire::filmByteSize(r.film.width(), r.film.height())) / (1 << 20);
+  if (state.range(0) == 1920) {
+    gFigures.uploadHd = best;
+    gFigures.hdMiB = mib;
+  } else {
+    gFigures.uploadJobFilm = best;
+    gFigures.jobFilmMiB = mib;
+  }
   state.counters["MiB"] = mib;
   state.counters["MiB/s"] = benchmark::Counter(mib, benchmark::Counter::kIsIterationInvariantRate);
   server.server->Shutdown();
@@ -134,7 +148,7 @@ void BM_FilmUpload(benchmark::State& state) {
 
 BENCHMARK(BM_InProcess)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LocalFarm2Workers)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_FilmUpload)->Args({96, 96})->Args({1920, 1080})->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FilmUpload)->Args({128, 128})->Args({1920, 1080})->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace mlt::farm
@@ -152,5 +166,10 @@ int main(int argc, char** argv) {
     std::printf("bootstrap: %.3f s = %.1f%% of the in-process job (runs on the coordinator, not parallelized)\n",
                 gFigures.bootstrap, 100.0 * gFigures.bootstrap / gFigures.inProcess);
   }
+  if (gFigures.uploadJobFilm > 0 && gFigures.uploadHd > 0)
+    std::printf("film upload (1 MiB chunks, loopback, best of 3): the job's 128x128 film %.2f MiB in %.1f ms; "
+                "a 1920x1080 film %.1f MiB in %.1f ms (%.0f MiB/s)\n",
+                gFigures.jobFilmMiB, 1e3 * gFigures.uploadJobFilm, gFigures.hdMiB, 1e3 * gFigures.uploadHd,
+                gFigures.hdMiB / gFigures.uploadHd);
   return 0;
 }
