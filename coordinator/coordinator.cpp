@@ -121,6 +121,7 @@ Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) 
   }
   planner_ = std::thread([this] { plannerLoop(); });
   reaper_ = std::thread([this] { reaperLoop(); });
+  if (opt_.previewEverySeconds > 0) preview_ = std::thread([this] { previewLoop(); });
 }
 
 Coordinator::~Coordinator() { stop(); }
@@ -135,6 +136,7 @@ void Coordinator::stop() {
   changed_.notify_all();
   if (planner_.joinable()) planner_.join();
   if (reaper_.joinable()) reaper_.join();
+  if (preview_.joinable()) preview_.join();
 }
 
 std::string Coordinator::sceneDir(const std::string& hash) const {

@@ -30,7 +30,8 @@ struct CoordinatorOptions {
   double leaseTimeoutSeconds = 10.0;  // a lease not renewed for this long is queued again
   bool keepPartials = false;          // also write STATE/jobs/<id>/partials/task-NNNN.exr
   int maxAttempts = 3;
-  double leaseWaitSeconds = 1.0;      // LeaseWork long-polls this long when there is nothing to lease                // a task that failed (report or lease expiry) this often fails its job
+  double leaseWaitSeconds = 1.0;
+  double previewEverySeconds = 0;     // > 0: write STATE/jobs/<id>/preview.{exr,png} this often while running      // LeaseWork long-polls this long when there is nothing to lease                // a task that failed (report or lease expiry) this often fails its job
 };
 
 class Coordinator final : public ClientHandler, public WorkerHandler {
@@ -73,6 +74,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     std::map<std::string, std::string> defines;  // scene parameters (Mitsuba -D)
     Clock::time_point renderStart;
     uint64_t workDoneAtStart = 0;  // accepted before this process started (for the ETA)
+    uint32_t previewTasks = 0;     // tasks in the last preview
   };
   struct LeaseRec {
     std::string workerId;
@@ -98,6 +100,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   std::string jobDir(int64_t id) const;
   void plannerLoop();
   void reaperLoop();
+  void previewLoop();                                                   // coordinator/preview.cpp
+  void writePreview(int64_t id, std::unique_lock<std::mutex>& lock);   // unlocks while merging
   void merge(int64_t id);
   void planOne(int64_t id);
   static uint64_t unitWork(const JobPlan& plan, const WorkUnit& u);
@@ -113,7 +117,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   uint64_t nextLease_ = 1, nextWorker_ = 1;
   std::string instance_;                // random per process: ids never collide across restarts
   bool stopping_ = false;
-  std::thread planner_, reaper_;
+  std::thread planner_, reaper_, preview_;
 };
 
 std::string formatJobId(int64_t id);

@@ -39,6 +39,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-attempts", opt.maxAttempts,
                  "a task that failed this many times (worker error reports and expired leases) fails its job")
       ->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("--preview-every", opt.previewEverySeconds,
+                 "write STATE/jobs/JOB/preview.exr and .png of the tasks accepted so far this often (seconds; 0 = off)")
+      ->check(CLI::Range(0.0, 86400.0))->capture_default_str();
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
