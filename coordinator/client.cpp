@@ -266,6 +266,7 @@ std::string describeStatus(const JobStatus& s) {
   if (s.b > 0) out += fmt::format("  b={:.6g}±{:.2g}", s.b, s.bStdErr);
   if (s.workTotal > 0) out += fmt::format("  work {}/{} ({:.0f}%)", s.workDone, s.workTotal, 100.0 * double(s.workDone) / double(s.workTotal));
   if (s.unitsTotal > 0) out += fmt::format("  units {}/{}", s.unitsDone, s.unitsTotal);
+  if (s.failedAttempts > 0) out += fmt::format("  failed attempts {}", s.failedAttempts);
   if (s.etaSeconds >= 0 && s.state == JobState::Running) out += fmt::format("  eta {:.1f}s", s.etaSeconds);
   if (!s.error.empty()) out += "  error: " + s.error;
   return out;

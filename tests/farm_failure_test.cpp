@@ -30,6 +30,8 @@ TEST(FarmFailure, AUnitThatAlwaysThrowsFailsItsJobAfterMaxAttempts) {
   wire::SubmittedSettings small = tinySettings(Method::BDPT);
   small.settings.spp = 4;  // units 0-3 only: never fails
   JobStatus good = c.submit(cornellBox(), small);
+  ChildProcess watch({toolsDir() + "/mltfarm", "watch", bad.jobId, "--coordinator", farm.coordinator->address},
+                     farm.dir / "watch.log", false);
 
   JobStatus s = farm.waitDone(bad.jobId);
   ASSERT_EQ(s.state, JobState::Failed) << describeStatus(s);
@@ -46,6 +48,20 @@ TEST(FarmFailure, AUnitThatAlwaysThrowsFailsItsJobAfterMaxAttempts) {
   EXPECT_EQ(countLines(log, {"job=" + bad.jobId + " ", "event=task_failed"}), 3u);
   EXPECT_EQ(countLines(log, {"job=" + bad.jobId + " ", "event=requeued"}), 2u);
   const uint32_t acceptedBefore = s.tasksDone;
+
+  // `mltfarm watch` follows the job to its failure (exit code != 0), one line per change: no two
+  // consecutive lines that differ only in the ETA.
+  EXPECT_NE(watch.wait(std::chrono::seconds(30)), 0);
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(readFile(farm.dir / "watch.log"));
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind(bad.jobId + " ", 0) == 0) lines.push_back(l.substr(0, l.find("  eta ")));
+  }
+  ASSERT_GE(lines.size(), 2u);
+  for (size_t i = 1; i < lines.size(); ++i) EXPECT_NE(lines[i], lines[i - 1]) << "line " << i << " repeats";
+  EXPECT_NE(lines.back().find("FAILED"), std::string::npos) << lines.back();
+  EXPECT_NE(lines.back().find("fails on purpose"), std::string::npos) << lines.back();
 
   // `mltfarm status` shows the error; fetching the result is refused with it.
   {

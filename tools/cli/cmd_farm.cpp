@@ -38,8 +38,8 @@ void printStatus(const JobStatus& s) { std::printf("%s\n", farm::describeStatus(
 // What a watcher cares about: a line is printed only when one of these changes (not for ETA or
 // elapsed-time ticks alone).
 std::string watchKey(const JobStatus& s) {
-  return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", int(s.state), s.phase, s.tasksDone, s.unitsDone, s.workDone,
-                     s.leasedTasks, s.b, s.failedAttempts, s.error);
+  return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}", int(s.state), s.phase, s.tasksDone, s.unitsDone, s.workDone, s.b,
+                     s.failedAttempts, s.error);
 }
 
 int watchToEnd(FarmClient& client, const std::string& jobId) {
