@@ -258,5 +258,30 @@ TEST(JobApi, AnyGroupingOfSampleUnitsGivesIdenticalBits) {
   }
 }
 
+// Beyond the exact-merging bound (a unit's sum of 2^26 or more in one pixel) a unit fails loudly, naming
+// the value, instead of returning sums that would merge differently in different groupings.
+class HugeEvaluator final : public PathEvaluator {
+ public:
+  void evaluate(SampleSource& src, const Vec2* pixel, PathContribution& out) const override {
+    src.startStream(Stream::Camera);
+    src.next2D();
+    out.cameraRaster = Vec2(pixel->x + 0.5f, pixel->y + 0.5f);
+    out.splats.push_back({out.cameraRaster, Color(0.5f, 1e8f, 0.5f), 0, 2});
+  }
+};
+
+TEST(JobApi, SampleUnitBeyondTheExactMergingBoundFailsWithTheValue) {
+  RenderSettings s = settingsFor(Method::PT, 1, 4, 4);
+  const JobPlan plan = planSampleJob(s);
+  const HugeEvaluator eval;
+  try {
+    runSampleUnit(eval, plan, plan.units[0]);
+    ADD_FAILURE() << "a sum of 1e8 was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("too large to merge exactly"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("100000000"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace mlt
