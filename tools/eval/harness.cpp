@@ -72,16 +72,22 @@ void setWork(RenderSettings& s, double work) {
 }
 double minWork(Method m) { return isMarkovChainMethod(m) ? 0.05 : 1.0; }
 
-// time(work) = fixed + perWork * work, fitted from calibration jobs and refined by every run.
+// time(work) = fixed + perWork * work. `fixed` comes from the smallest calibration job; perWork is the
+// least-squares slope through (work, time - fixed) over the larger calibration job and every run since,
+// so it keeps improving as runs come in.
 struct TimeModel {
   double fixed = 0, perWork = 0;
+  double sumWT = 0, sumWW = 0;
   double workFor(double budget, Method m) const {
     double w = perWork > 0 ? (budget - fixed) / perWork : minWork(m);
     w = std::max(w, minWork(m));
     return isMarkovChainMethod(m) ? w : std::round(w);
   }
-  void refine(double work, double seconds) {
-    if (seconds > fixed && work > 0) perWork = 0.5 * perWork + 0.5 * (seconds - fixed) / work;
+  void observe(double work, double seconds) {
+    if (work <= 0) return;
+    sumWT += work * std::max(seconds - fixed, 0.0);
+    sumWW += work * work;
+    if (sumWT > 0) perWork = sumWT / sumWW;
   }
 };
 
@@ -153,22 +159,30 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   settings.samplesPerUnit = cfg.base.samplesPerUnit;
 
   // ---- Calibration (equal time) -------------------------------------------------------------
+  // The smallest job measures the fixed cost (bootstrap, planning). Then the work grows until the extra
+  // time is large enough to measure the cost per unit of work above timing noise: a quarter of the
+  // smallest budget (at least 0.1 s); each step multiplies the work by 2..16, aiming at that target.
   TimeModel model;
   if (!cfg.equalSamples) {
-    const double w1 = minWork(ms.method), w2 = 4 * w1;
+    const double target = std::max(0.1, 0.25 * *std::min_element(cfg.budgets.begin(), cfg.budgets.end()));
     RenderSettings cal = settings;
     cal.seed = hashKeys(cfg.seed, fnv1a64(es.name), fnv1a64(ms.label), uint64_t(0xca1b));
+    const double w1 = minWork(ms.method);
     setWork(cal, w1);
-    double t1 = renderOnce(cfg, es, *scene, cal).seconds;
-    setWork(cal, w2);
-    double t2 = renderOnce(cfg, es, *scene, cal).seconds;
-    model.perWork = (t2 - t1) / (w2 - w1);
-    if (!(model.perWork > 0)) model.perWork = t2 / w2;
+    const double t1 = renderOnce(cfg, es, *scene, cal).seconds;
+    double w2 = w1, t2 = t1;
+    for (int step = 0; step < 16 && t2 - t1 < target; ++step) {
+      double grow = t2 - t1 > 0.01 ? std::clamp(1.5 * target / (t2 - t1), 2.0, 16.0) : 8.0;
+      w2 = isMarkovChainMethod(ms.method) ? w2 * grow : std::ceil(w2 * grow);
+      setWork(cal, w2);
+      t2 = renderOnce(cfg, es, *scene, cal).seconds;
+    }
+    model.perWork = t2 > t1 ? (t2 - t1) / (w2 - w1) : t2 / w2;
     model.fixed = std::max(0.0, t1 - model.perWork * w1);
+    model.observe(w2, t2);
     result.calibrations.push_back({es.name, ms.label, model.fixed, model.perWork});
-    logLine(cfg, fmt::format("{} {}: calibration {:.3g} s fixed + {:.3g} s per {}", es.name, ms.label,
-                             model.fixed, model.perWork,
-                             isMarkovChainMethod(ms.method) ? "mutation per pixel" : "spp"));
+    logLine(cfg, fmt::format("{} {}: calibration {:.3g} s fixed + {:.3g} s per {}", es.name, ms.label, model.fixed,
+                             model.perWork, isMarkovChainMethod(ms.method) ? "mutation per pixel" : "spp"));
   }
 
   std::vector<std::pair<double, std::vector<Color>>> largestImages;  // (relMSE, image) at the largest budget
@@ -180,7 +194,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
       const double work = cfg.equalSamples ? budget : model.workFor(budget, ms.method);
       setWork(rs, work);
       RunOutput out = renderOnce(cfg, es, *scene, rs);
-      if (!cfg.equalSamples) model.refine(work, out.seconds);
+      if (!cfg.equalSamples) model.observe(work, out.seconds);
       if (out.image.size() != ref.image.size())
         throw std::runtime_error(fmt::format("eval: {} {} rendered {} pixels, the reference has {}", es.name,
                                              ms.label, out.image.size(), ref.image.size()));

@@ -5,7 +5,8 @@
 //
 // Budgets. Equal time (default): budgets are seconds. A short calibration per (scene, method) fits
 // time(work) = F + c * work (F = fixed cost such as the bootstrap, work = spp or mutations per pixel) from
-// two small complete jobs; each run then asks for work = (budget - F) / c, and c is refined from every
+// a minimal job and a growing one (see evalMethod); each run then asks for work = (budget - F) / c, and c
+// is refined (least squares) from every
 // run. The run is a complete job (every planned chain runs, so the estimator is exactly what users run)
 // and the real wall time is recorded next to the budget. Equal samples (--equal-samples): budgets are spp
 // for pt/lt/bdpt and mutations per pixel for the Markov chain methods.
