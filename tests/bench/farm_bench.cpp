@@ -66,7 +66,7 @@ void BM_InProcess(benchmark::State& state) {
     benchmark::DoNotOptimize(developImage(plan, merged));
     const double seconds = since(t0);
     state.SetIterationTime(seconds);
-    gFigures.inProcess = seconds;
+    if (gFigures.inProcess == 0 || seconds < gFigures.inProcess) gFigures.inProcess = seconds;  // best of N
     gFigures.bootstrap = plan.norm.bootstrapSeconds;
   }
 }
@@ -81,7 +81,7 @@ void BM_LocalFarm2Workers(benchmark::State& state) {
     o.outExr = (std::filesystem::temp_directory_path() / "mltfarm-bench.exr").string();
     EmbeddedFarmResult r = runEmbeddedFarm(o);
     state.SetIterationTime(r.seconds);
-    gFigures.farm = r.seconds;
+    if (gFigures.farm == 0 || r.seconds < gFigures.farm) gFigures.farm = r.seconds;  // best of N
     gFigures.startup = r.startupSeconds;
     std::filesystem::remove(o.outExr);
   }
@@ -146,8 +146,9 @@ void BM_FilmUpload(benchmark::State& state) {
   server.server->Shutdown();
 }
 
-BENCHMARK(BM_InProcess)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LocalFarm2Workers)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
+// Best of 3 each: on a shared machine single runs vary by 10-20%, more than the overhead measured.
+BENCHMARK(BM_InProcess)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LocalFarm2Workers)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FilmUpload)->Args({128, 128})->Args({1920, 1080})->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
 }  // namespace
@@ -159,8 +160,8 @@ int main(int argc, char** argv) {
   benchmark::Shutdown();
   using mlt::farm::gFigures;
   if (gFigures.inProcess > 0 && gFigures.farm > 0) {
-    std::printf("\nfarm overhead: local farm (2 workers) %.3f s vs in-process (2 threads) %.3f s: ratio %.3f "
-                "(%+.1f%%); process start-up %.3f s not included\n",
+    std::printf("\nfarm overhead (best of 3): local farm (2 workers) %.3f s vs in-process (2 threads) %.3f s: ratio "
+                "%.3f (%+.1f%%); process start-up %.3f s not included\n",
                 gFigures.farm, gFigures.inProcess, gFigures.farm / gFigures.inProcess,
                 100.0 * (gFigures.farm / gFigures.inProcess - 1.0), gFigures.startup);
     std::printf("bootstrap: %.3f s = %.1f%% of the in-process job (runs on the coordinator, not parallelized)\n",
