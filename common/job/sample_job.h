@@ -9,9 +9,9 @@
 // stochastic rounding keyed by (job seed, unit, element); quantizeFilm in common/mlt/develop.h, the same
 // as the Markov chains), and pixel counts are integers. Sums of such values are exact in double, so any
 // grouping of units (one by one in-process, contiguous tasks on the farm) develops to identical bytes.
-// Bound: a unit's sum per pixel and channel must stay below 2^(52 - kQuantumExp) = 2^26 ~ 6.7e7 (else
-// the unit fails with a message naming the value), and the merged per-pixel sums below 2^(53 -
-// kQuantumExp) = 2^27 ~ 1.3e8 (i.e. spp * mean pixel value, splats in the same units); beyond that the
+// Bound: grouping-independent bytes hold while the merged per-pixel sums stay below 2^(53 -
+// kQuantumExp) = 2^27 ~ 1.3e8 (a unit's own sum of 2^26 or more is already a multiple of the quantum and
+// is kept as it is, so a firefly never fails a unit) (i.e. spp * mean pixel value, splats in the same units); beyond that the
 // image is still right but its last bits may depend on the grouping. The rounding error is at most
 // 2^-26 ~ 1.5e-8 per unit and pixel before the division by the sample count.
 #pragma once

@@ -27,8 +27,9 @@ namespace {
 double quantize(double v, uint64_t key) {
   if (v == 0) return 0;
   const double scaled = std::ldexp(v, kQuantumExp);
-  if (!(std::fabs(scaled) < 0x1p52))
-    throw std::runtime_error("quantizeFilm: sum " + std::to_string(v) + " too large to merge exactly");
+  // |v| >= 2^(52 - kQuantumExp): the spacing of doubles there is already >= 2^-kQuantumExp, so v is a
+  // multiple of the quantum as it stands. Keep it: a firefly must never fail a render.
+  if (!(std::fabs(scaled) < 0x1p52)) return v;
   const double lo = std::floor(scaled);
   const double u = double(mix64(key) >> 11) * 0x1p-53;
   return std::ldexp(u < scaled - lo ? lo + 1 : lo, -kQuantumExp);

@@ -55,8 +55,9 @@ double chainSplatScale(double b, uint64_t totalMutations, size_t pixels);
 double lengthWeightCorrection(double bk, uint64_t Mk, double b, uint64_t M);
 // (D3): the pre-scale of the direct pass's t = 1 splats.
 double directSplatPrescale(double b, uint64_t totalMutations, uint64_t directLightPaths);
-// Rounds every sum of `film` to a multiple of 2^-kQuantumExp (see above). Throws if a value is too large
-// to be merged exactly.
+// Rounds every sum of `film` to a multiple of 2^-kQuantumExp (see above). Values of 2^(52 - kQuantumExp)
+// or more are multiples already and are kept as they are; where merged sums exceed 2^(53 - kQuantumExp)
+// the last bits may depend on the grouping (the image is still right, and deterministic per grouping).
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex);
 
 }  // namespace mlt
