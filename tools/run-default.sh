@@ -6,4 +6,4 @@ cd "$(dirname "$0")/.."
 bash deploy/setup.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$(nproc)"
-./build/tools/mltfarm render scenes/cornell-box.xml -o cornell-box.exr "$@"
+./build/tools/mltfarm render scenes/cornell-box.xml --method mmlt -o cornell-box.exr "$@"
