@@ -60,8 +60,10 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, onSignal);
     gStop.acquire();
     spdlog::info("event=shutdown");
-    rs.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    // Stop first: it wakes long polls (LeaseWork, WatchJob) so that the server's shutdown does not wait
+    // for them to time out. Handlers still answer (uploads are still stored) until the server is down.
     coordinator.stop();
+    rs.server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   } catch (const std::exception& e) {
     spdlog::error("event=fatal error=\"{}\"", e.what());
     return 1;

@@ -48,6 +48,7 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
 
   auto shutdown = [&] {
     for (auto& w : workers) w.signal(SIGTERM);
+    coord.process.signal(SIGTERM);  // the job is done: also ends the workers' long polls at once
     for (auto& w : workers) w.terminate(std::chrono::seconds(10));
     coord.process.terminate(std::chrono::seconds(10));
   };

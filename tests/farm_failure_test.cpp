@@ -23,8 +23,9 @@ size_t countLines(const std::string& text, const std::vector<std::string>& needl
 TEST(FarmFailure, AUnitThatAlwaysThrowsFailsItsJobAfterMaxAttempts) {
   Farm farm;
   farm.startCoordinator({"--max-attempts", "3"});
-  // Every task holding work unit 5 throws on this worker.
-  farm.startWorker(2, {"--debug-fail-unit", "5"});
+  // Every task holding work unit 5 throws on this worker, each task after 300 ms, so the failure takes
+  // about a second and `mltfarm watch` below sees the job before it ends.
+  farm.startWorker(2, {"--debug-fail-unit", "5", "--debug-task-delay-ms", "300"});
   auto c = farm.client();
   JobStatus bad = c.submit(cornellBox(), tinySettings(Method::PSSMLT));  // 24 chains: unit 5 exists
   wire::SubmittedSettings small = tinySettings(Method::BDPT);

@@ -182,10 +182,14 @@ void Worker::runTask(Active* a) {
     PartialResult result;
     if (!farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel)) {
       spdlog::info("worker={} job={} task={} event=abandoned", workerId, l.jobId, l.taskIndex);
+      releaseSlot(a);
       a->finished = true;
       return;
     }
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // The compute slot is free while the film uploads (and the coordinator stores it): lease the next task
+    // now so that a core never waits on the network.
+    releaseSlot(a);
     int attempt = 0;
     while (true) {
       try {
@@ -208,7 +212,17 @@ void Worker::runTask(Active* a) {
     const auto* rpc = dynamic_cast<const RpcError*>(&e);
     if (!a->cancel && !(rpc && transient(rpc->code()))) reportFailure(l, workerId, e.what());
   }
+  releaseSlot(a);
   a->finished = true;
+  slotFreed_.notify_all();
+}
+
+void Worker::releaseSlot(Active* a) {
+  {
+    std::lock_guard lock(mu_);
+    a->computing = false;
+  }
+  slotFreed_.notify_all();
 }
 
 void Worker::reportFailure(const Lease& l, const std::string& workerId, const std::string& message) {
@@ -251,14 +265,20 @@ int Worker::run() {
     int free;
     std::string id;
     {
-      std::lock_guard lock(mu_);
-      free = opt_.threads - int(active_.size());
+      std::unique_lock lock(mu_);
+      auto computing = [this] {
+        int n = 0;
+        for (const auto& a : active_) n += a->computing ? 1 : 0;
+        return n;
+      };
+      // Woken as soon as a task's film is made (releaseSlot), not by polling.
+      slotFreed_.wait_for(lock, std::chrono::milliseconds(200),
+                          [&] { return stop_ || opt_.threads - computing() > 0; });
+      free = opt_.threads - computing();
       id = workerId_;
     }
-    if (free <= 0) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      continue;
-    }
+    if (stop_) break;
+    if (free <= 0) continue;
     grpc::ClientContext ctx;
     prepareContext(ctx, opt_.coordinator, std::chrono::seconds(10));
     v1::LeaseRequest req;

@@ -6,6 +6,7 @@
 // units and returns their leases so other workers pick them up at once.
 #pragma once
 #include <atomic>
+#include <condition_variable>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -42,6 +43,7 @@ class Worker {
   struct Active {
     Lease lease;
     std::atomic<bool> cancel{false};
+    std::atomic<bool> computing{true};  // holds a compute slot; false once the film is made (upload runs on)
     std::atomic<bool> finished{false};
     std::thread thread;
   };
@@ -57,6 +59,7 @@ class Worker {
   std::shared_ptr<const RenderScene> sceneFor(const Lease& l, const JobPlan& plan);
   void reportFailure(const Lease& l, const std::string& workerId, const std::string& message);
   void reapFinished();
+  void releaseSlot(Active* a);  // the task no longer computes: its slot may take the next lease
   void backoff(int& attempt);
 
   WorkerOptions opt_;
@@ -65,6 +68,7 @@ class Worker {
   std::atomic<bool> stop_{false};
   std::atomic<bool> reregister_{false};
   std::mutex mu_;  // guards workerId_, active_, plans_, scenes_
+  std::condition_variable slotFreed_;  // a task stopped computing or finished: lease the next one now
   std::string workerId_;
   double heartbeatSeconds_ = 1;
   std::vector<std::unique_ptr<Active>> active_;
