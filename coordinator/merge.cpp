@@ -1,6 +1,8 @@
 // Tasks, merging, development and partial EXRs (see merge.h).
 #include "coordinator/merge.h"
 
+#include "common/job/image_metadata.h"
+
 #include <algorithm>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -89,28 +91,7 @@ double previewSplatScale(const JobPlan& plan) {
 ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const PartialResult& merged) {
   // The keys of `mltfarm render --in-process` (tools/cli/render_local.cpp), minus wall-clock values that
   // would make the bytes depend on the run, plus the farm's own.
-  ImageMetadata m;
-  const bool chains = isMarkovChainMethod(plan.settings.method);
-  const double pixels = double(plan.settings.width) * plan.settings.height;
-  m.strings["software"] = "mltfarm";
-  m.strings["method"] = methodName(plan.settings.method);
-  m.strings["scene"] = id.scene;
-  m.strings["sceneHash"] = id.sceneHash;
-  m.strings["seed"] = std::to_string(plan.settings.seed);  // a string: 64-bit seeds do not fit a double
-  m.numbers["width"] = plan.settings.width;
-  m.numbers["height"] = plan.settings.height;
-  m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
-  m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
-  m.numbers["workUnits"] = double(merged.units.size());
-  m.numbers["workUnitsPlanned"] = double(plan.units.size());
-  m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());
-  if (chains) {
-    addChainMetadata(makeChainReport(plan, merged), m);  // b, b_k, acceptance, ... (common/mlt/chain_report.h)
-    m.numbers["largeStepProb"] = plan.settings.largeStepProb;
-  } else {
-    m.numbers["samples"] = double(merged.samples);
-    m.numbers["spp"] = double(merged.samples) / pixels;
-  }
+  ImageMetadata m = imageMetadata(plan, merged, id.scene, id.sceneHash);
   m.strings["farm.job"] = id.jobId;
   m.numbers["farm.tasks"] = double(splitTasks(plan).size());
   m.numbers["farm.wireVersion"] = wire::kFormatVersion;

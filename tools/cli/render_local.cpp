@@ -1,6 +1,8 @@
 // The in-process renderer (see render_local.h).
 #include "tools/cli/render_local.h"
 
+#include "common/job/image_metadata.h"
+
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -254,27 +256,15 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
 
   // ---- Metadata and output --------------------------------------------------------------------------
-  const double pixels = double(plan.settings.width) * double(plan.settings.height);
+  result.metadata = imageMetadata(plan, result.merged, options.scenePath, result.sceneHash);
   ImageMetadata& m = result.metadata;
-  m.strings["software"] = "mltfarm";
-  m.strings["method"] = methodName(plan.settings.method);
-  m.strings["scene"] = options.scenePath;
-  m.strings["sceneHash"] = result.sceneHash;
-  m.strings["seed"] = std::to_string(plan.settings.seed);  // a string: 64-bit seeds do not fit a double
-  m.numbers["width"] = plan.settings.width;
-  m.numbers["height"] = plan.settings.height;
-  m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
-  m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
+  m.numbers["workUnitsPlanned"] = double(nUnits);  // plan.units was cut to the units a time budget ran
   m.numbers["renderSeconds"] = result.seconds;
   m.numbers["threads"] = threads;
-  m.numbers["workUnits"] = double(merged);
-  m.numbers["workUnitsPlanned"] = double(nUnits);
-  m.numbers["nonFiniteSamples"] = double(result.merged.film.nonFiniteSamples());
   if (timed) m.numbers["timeBudgetSeconds"] = plan.settings.timeBudgetSeconds;
   std::optional<ChainReport> report;
   if (chains) {
     report = makeChainReport(plan, result.merged);
-    addChainMetadata(*report, m);
     m.numbers["bootstrapSeconds"] = plan.norm.bootstrapSeconds;
     m.numbers["chainSeconds"] = result.runSeconds;
     m.numbers["mutationsPerSecond"] = double(result.merged.samples) / std::max(result.runSeconds, 1e-9);
@@ -282,9 +272,6 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
       m.numbers["trialSeconds"] = result.chainBudget->trialSeconds;
       m.numbers["trialMutations"] = double(result.chainBudget->trialMutations);
     }
-  } else {
-    m.numbers["samples"] = double(result.merged.samples);
-    m.numbers["spp"] = double(result.merged.samples) / pixels;
   }
   if (!options.outExr.empty()) {
     writeExr(options.outExr, plan.settings.width, plan.settings.height, result.image, m);
