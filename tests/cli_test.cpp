@@ -13,7 +13,9 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "common/io/exr_io.h"
 
@@ -193,6 +195,36 @@ TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel)
   EXPECT_EQ(b.metadata.numbers.at("mutationsPerPixel"), mpp);
   EXPECT_EQ(b.metadata.strings.at("kernel"), "kelemen");
   EXPECT_TRUE(sameBits(a, b)) << "mutations per pixel " << match[1].str();
+}
+
+
+// `mltfarm eval --farm`: every run is a job on the local farm (coordinator + worker processes); the
+// records say so and carry the chain statistics the farm's EXR metadata brings back.
+TEST_F(Cli, EvalRunsThroughTheFarm) {
+  const fs::path dir = tempDir() / "eval-farm";
+  const RunResult r = run("eval --scenes " + kScenes + "furnace-sphere.xml --methods pt,pssmlt --runs 2 "
+                          "--equal-samples --budgets 2 --width 16 --height 16 --ref-spp 16 --bootstrap 2000 "
+                          "--no-ref-cache --farm -o " + dir.string());
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::ifstream csv(dir / "runs.csv");
+  std::string line;
+  std::getline(csv, line);  // header
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    EXPECT_NE(line.find(",farm,"), std::string::npos) << line;
+    if (line.find(",pssmlt,") != std::string::npos) {
+      // scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,acceptance,...
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      ASSERT_GT(f.size(), 14u) << line;
+      ASSERT_FALSE(f[14].empty()) << "acceptance travels back from the farm's EXR: " << line;
+      EXPECT_GT(std::stod(f[14]), 0.0) << line;
+      EXPECT_LE(std::stod(f[14]), 1.0) << line;
+    }
+  }
+  EXPECT_EQ(rows, 2 * 2);
 }
 
 }  // namespace

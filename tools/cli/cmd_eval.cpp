@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/io/exr_io.h"
+#include "common/mlt/chain_report.h"
 #include "common/scene/mitsuba_loader.h"
 #include "tools/cli/commands.h"
 #include "tools/eval/harness.h"
@@ -52,8 +53,8 @@ std::string shellQuote(const std::string& s) {
 
 // --farm: every run is `mltfarm render SCENE --farm ...` in a child process (the command users run: it
 // starts a coordinator and local worker processes, submits, merges, develops), timed from the outside;
-// the image and the work done are read back from the EXR it writes. Chain acceptance statistics do not
-// travel through the EXR, so farm runs of Markov chain methods have no acceptance figures.
+// the image, the work done and the chains' acceptance statistics are read back from the EXR it writes
+// (the chain report keys of common/mlt/chain_report.h; counts are rebuilt from the recorded rates).
 eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& defines, int threads,
                                 const std::string& workDir) {
   std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
@@ -90,6 +91,31 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
     };
     r.samples = uint64_t(isMarkovChainMethod(s.method) ? num("mutations") : num("samples"));
     r.units = int(isMarkovChainMethod(s.method) ? num("chains") : num("workUnits"));
+    if (isMarkovChainMethod(s.method)) {
+      const ChainReport report = chainReportFromMetadata(img.metadata);
+      if (report.hasAcceptance) {
+        auto accepted = [](double rate, uint64_t proposed) { return uint64_t(std::llround(rate * double(proposed))); };
+        ChainStats& st = r.stats;
+        st.largeProposed = report.largeSteps;
+        st.largeAccepted = accepted(report.acceptanceLarge, report.largeSteps);
+        st.smallProposed = report.smallSteps;
+        st.smallAccepted = accepted(report.acceptanceSmall, report.smallSteps);
+        if (report.lengths.empty()) {  // one target over all lengths: index 0 (as ChainStats does)
+          const uint64_t proposed = report.largeSteps + report.smallSteps;
+          st.proposedPerLength = {proposed};
+          st.acceptedPerLength = {accepted(report.acceptance, proposed)};
+        } else {
+          for (const ChainLengthReport& l : report.lengths) {
+            if (int(st.proposedPerLength.size()) <= l.k) {
+              st.proposedPerLength.resize(l.k + 1, 0);
+              st.acceptedPerLength.resize(l.k + 1, 0);
+            }
+            st.proposedPerLength[l.k] = l.mutations;
+            st.acceptedPerLength[l.k] = accepted(l.acceptance, l.mutations);
+          }
+        }
+      }
+    }
     return r;
   };
 }
