@@ -20,6 +20,7 @@
 #include "common/job/render_job.h"
 #include "common/render/render_scene.h"
 #include "tests/support/estimates.h"
+#include "tests/support/mlt_stats.h"
 #include "tests/support/test_scenes.h"
 
 namespace mlt {
@@ -34,41 +35,8 @@ const RenderScene& cornell() {
   return *scene;
 }
 
-// Image mean and tile means (as test::estimateImage) of developed images over kRuns seeds.
-test::ImageStats mltStats(const RenderScene& scene, RenderSettings s, int w, int h) {
-  std::vector<std::vector<double>> runs;
-  for (int r = 0; r < kRuns; ++r) {
-    s.seed = 1000 + r;
-    const JobPlan plan = planJob(scene, s);
-    std::vector<PartialResult> parts(plan.units.size());
-    tbb::parallel_for(size_t(0), parts.size(), [&](size_t i) { parts[i] = runWorkUnit(scene, plan, plan.units[i]); });
-    PartialResult merged;
-    for (const PartialResult& p : parts) merged.add(p);
-    const std::vector<Color> img = developImage(plan, merged);
-    std::vector<double> v(1 + kTiles * kTiles, 0.0);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const double L = luminance(img[size_t(y) * w + x]);
-        v[0] += L / (w * h);
-        v[1 + (y * kTiles / h) * kTiles + x * kTiles / w] += L * kTiles * kTiles / (w * h);
-      }
-    runs.push_back(v);
-  }
-  test::ImageStats st;
-  st.tilesX = st.tilesY = kTiles;
-  st.n = kRuns;
-  const size_t K = runs[0].size();
-  st.mean.assign(K, 0);
-  st.stdErr.assign(K, 0);
-  for (size_t k = 0; k < K; ++k) {
-    double m = 0, sq = 0;
-    for (const auto& v : runs) m += v[k];
-    m /= kRuns;
-    for (const auto& v : runs) sq += (v[k] - m) * (v[k] - m);
-    st.mean[k] = m;
-    st.stdErr[k] = std::sqrt(sq / (kRuns - 1) / kRuns);
-  }
-  return st;
+test::ImageStats mltStats(const RenderScene& scene, const RenderSettings& s, int w, int h) {
+  return test::markovChainStats(scene, s, w, h, kRuns, kTiles);
 }
 
 const test::ImageStats& bdptReference() {
@@ -98,8 +66,8 @@ void expectAgreesWithBdpt(const RenderSettings& s, const char* label) {
   const double z = test::maxZ(mlt, ref, &where);
   EXPECT_LT(z, kZ) << label << ": entry " << where << " (0 = image mean) mlt " << mlt.mean[where] << " +- "
                    << mlt.stdErr[where] << " vs bdpt " << ref.mean[where] << " +- " << ref.stdErr[where];
-  std::printf("%s: image mean %.5f +- %.5f, bdpt %.5f +- %.5f, max z %.2f\n", label, mlt.mean[0], mlt.stdErr[0], ref.mean[0], ref.stdErr[0], z);
-  // %.5f +- %.5f, bdpt %.5f +- %.5f\n", label, mlt.mean[0], mlt.stdErr[0], ref.mean[0], ref.stdErr[0]);
+  std::printf("%s: image mean %.5f +- %.5f, bdpt %.5f +- %.5f, max z %.2f\n", label, mlt.mean[0], mlt.stdErr[0],
+              ref.mean[0], ref.stdErr[0], z);
   // The comparison must be able to fail: a 6% brightness error would exceed kZ on the image mean.
   EXPECT_LT(kZ * std::hypot(mlt.stdErr[0], ref.stdErr[0]), 0.06 * ref.mean[0]) << label << ": test too weak";
 }
