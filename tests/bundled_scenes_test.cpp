@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <string>
 
 #include "common/integrators/evaluators.h"
@@ -51,6 +52,9 @@ struct Case {
   uint64_t nPt, nLt, nBdpt;
   double power = 0.10;  // relative image-mean error the comparison must resolve
 };
+
+// Readable test names in ctest (instead of the bytes of the struct).
+void PrintTo(const Case& c, std::ostream* os) { *os << c.scene; }
 
 class BundledScenes : public ::testing::TestWithParam<Case> {};
 

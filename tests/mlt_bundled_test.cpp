@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <string>
 
 #include "common/integrators/evaluators.h"
@@ -26,6 +27,9 @@ struct Case {
   double mutationsPerPixel;
   double power;  // relative image-mean error the comparison must resolve
 };
+
+// Readable test names in ctest (instead of the bytes of the struct).
+void PrintTo(const Case& c, std::ostream* os) { *os << c.scene << " " << methodName(c.method); }
 
 class MltBundled : public ::testing::TestWithParam<Case> {};
 
