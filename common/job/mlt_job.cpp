@@ -48,7 +48,8 @@ std::vector<int> chainLengths(const RenderSettings& s) {
   if (s.method != Method::MMLT) return {-1};
   if (s.integrator.maxDepth < 1)
     throw std::invalid_argument("settings: mmlt needs a finite max depth >= 1 (got " +
-                                std::to_string(s.integrator.maxDepth) + ")");
+                                std::to_string(s.integrator.maxDepth) +
+                                "; it runs chains per path length: pass --max-depth N, or use pssmlt)");
   std::vector<int> lengths;
   for (int k = mmltMinLength(s.separateDirect); k <= s.integrator.maxDepth; ++k) lengths.push_back(k);
   return lengths;
