@@ -1,6 +1,8 @@
 // The coordinator's state machine (see coordinator.h).
 #include "coordinator/coordinator.h"
 
+#include "common/job/mlt_job.h"
+
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -256,6 +258,13 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   if (!isMarkovChainMethod(s.method) && double(s.spp) * pixels > kMaxTotalWork)
     throw FarmError(Code::InvalidArgument, fmt::format("settings.spp: {} x {} pixels exceeds the limit {:.0e}", s.spp,
                                                        pixels, kMaxTotalWork));
+  if (isMarkovChainMethod(s.method)) {
+    try {
+      validateMarkovChainSettings(s);  // e.g. mmlt with the scene's unlimited depth: refused now, not at planning
+    } catch (const std::invalid_argument& e) {
+      throw FarmError(Code::InvalidArgument, e.what());
+    }
+  }
   buildRenderScene(desc, s.width, s.height);  // throws InvalidArgument naming the element
 
   // 3. Record it.

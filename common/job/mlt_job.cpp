@@ -95,8 +95,7 @@ void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
 
 }  // namespace
 
-MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
-  const RenderSettings& s = settings;
+void validateMarkovChainSettings(const RenderSettings& s) {
   if (!isMarkovChainMethod(s.method))
     throw std::invalid_argument(std::string("settings: method ") + methodName(s.method) + " is not a Markov chain method");
   if (s.bootstrapSamples < 2)
@@ -106,6 +105,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
   if (s.separateDirect && s.method == Method::PSSMLT)
     throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
+  chainLengths(s);  // mmlt: a finite max depth
+}
+
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
+  const RenderSettings& s = settings;
+  validateMarkovChainSettings(s);
 
   MarkovChainBootstrap out;
   out.settings = s;

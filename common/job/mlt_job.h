@@ -20,6 +20,9 @@ struct MarkovChainBootstrap {
 };
 
 // settings.width/height must be resolved against the scene camera (planJob does this).
+// Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
+// (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.
+void validateMarkovChainSettings(const RenderSettings& settings);
 MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);
 // Chain allocation from an existing bootstrap: the same plan, bit for bit, as planMarkovChainJob(scene,
 // settings). Throws std::invalid_argument naming the field if `settings` differs from the bootstrap's in
