@@ -141,7 +141,7 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const std::string number = "[0-9.e+-]+";
   EXPECT_TRUE(std::regex_search(r.output, std::regex("b = " + number + " ± " + number + " \\(rel\\. " + number +
-                                                     "%, 8000 bootstrap samples")))
+                                                     "%, [0-9]+ bootstrap samples")))
       << r.output;
   for (int k = 1; k <= 4; ++k)  // the per-length table: k, b_k ± SE, chains, mutations, acceptance
     EXPECT_TRUE(std::regex_search(r.output, std::regex("\\n +" + std::to_string(k) + " +" + number + " ± " + number +

@@ -97,8 +97,8 @@ TEST(Bootstrap, BitIdenticalForAnyThreadCount) {
         EXPECT_EQ(r->lengths[l].table.sample(j / 1000.0), a.lengths[l].table.sample(j / 1000.0));
     }
   }
-  // Candidates of different lengths are distinct numbers: slot l owns [l N, (l+1) N).
-  EXPECT_EQ(a.lengths[1].firstCandidate, 50000u);
+  // Candidates of different lengths are distinct numbers: slot l owns [l << 40, (l + 1) << 40).
+  EXPECT_EQ(a.lengths[1].firstCandidate, uint64_t(1) << kCandidateSlotBits);
 }
 
 TEST(Develop, QuantizedFilmsMergeExactlyInAnyGrouping) {
@@ -135,6 +135,57 @@ TEST(Develop, QuantizationIsUnbiased) {
   const double q = std::ldexp(1.0, -kQuantumExp);
   const double se = q * std::sqrt(0.3 * 0.7 / n);
   EXPECT_NEAR(sum / n, v, 4 * se);
+}
+
+}  // namespace
+}  // namespace mlt
+
+namespace mlt {
+namespace {
+
+// Sizing from b's standard error: a rare, bright contribution (relative error ~ sqrt((1-p)/(p N))) makes
+// its length grow until the target is met; a smooth one keeps the initial size; the cap holds; the result
+// is still the same for any thread count.
+BootstrapResult sizedBootstrap(int threads, uint64_t maxGrowth) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 20000;
+  bc.pathLengths = {1, 2};
+  bc.targetRelStdErr = 0.01;
+  bc.maxGrowth = maxGrowth;
+  return runBootstrap(bc, [] {
+    return [](uint64_t i, int k) {
+      const double u = IndependentSource(5, i).valueAt(0, 0);
+      return k == 1 ? (u < 0.02 ? 50.0 : 0.0)  // p = 2%: rel. error 7% at 20k candidates, ~1% needs ~1M
+                    : 1.0 + 0.1 * u;         // rel. error ~0.02%: never grows
+    };
+  });
+}
+
+TEST(Bootstrap, GrowsUntilTheRelativeStandardErrorMeetsTheTarget) {
+  const BootstrapResult capped = sizedBootstrap(2, 8);
+  EXPECT_EQ(capped.lengths[0].c.size(), 8u * 20000u);  // the cap: not enough to reach 1%
+  EXPECT_GT(capped.lengths[0].bStdErr, 0.01 * capped.lengths[0].b);
+  EXPECT_EQ(capped.lengths[1].c.size(), 20000u);       // smooth: no growth
+  EXPECT_EQ(capped.candidates, 9u * 20000u);
+
+  const BootstrapResult wide = sizedBootstrap(2, 64);
+  const LengthBootstrap& rare = wide.lengths[0];
+  EXPECT_LE(rare.bStdErr, 0.01 * rare.b);                 // target met ...
+  EXPECT_GT(rare.c.size(), 8u * 20000u);                  // ... by growing (doubling) ...
+  EXPECT_LE(rare.c.size(), 64u * 20000u);
+  // ... and the growth stopped at the first size that met it: half of it did not.
+  double sum = 0, sq = 0;
+  const size_t half = rare.c.size() / 2;
+  for (size_t i = 0; i < half; ++i) sum += rare.c[i];
+  const double b = sum / double(half);
+  for (size_t i = 0; i < half; ++i) sq += (rare.c[i] - b) * (rare.c[i] - b);
+  EXPECT_GT(std::sqrt(sq / (double(half) * double(half - 1))), 0.01 * b);
+  EXPECT_NEAR(rare.b, 0.02 * 50.0, 5 * rare.bStdErr);
+
+  const BootstrapResult one = sizedBootstrap(1, 64);
+  EXPECT_EQ(one.lengths[0].c, rare.c);
+  EXPECT_EQ(std::memcmp(&one.b, &wide.b, sizeof(double)), 0);
 }
 
 }  // namespace

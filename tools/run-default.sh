@@ -6,5 +6,4 @@ cd "$(dirname "$0")/.."
 bash deploy/setup.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$(nproc)"
-./build/tools/mltfarm render scenes/cornell-box.xml --method mmlt --mutations-per-pixel 256 --bootstrap 400000 \
-  -o cornell-box.exr "$@"
+./build/tools/mltfarm render scenes/cornell-box.xml --method mmlt --mutations-per-pixel 256 -o cornell-box.exr "$@"

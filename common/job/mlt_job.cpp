@@ -118,6 +118,8 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(s.bootstrapSamples);
+  bc.targetRelStdErr = kBootstrapTargetRelStdErr;
+  bc.maxGrowth = kBootstrapMaxGrowth;
   bc.pathLengths = lengths;
   const uint64_t seed = s.seed;
   out.result = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {

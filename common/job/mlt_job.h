@@ -20,6 +20,11 @@ struct MarkovChainBootstrap {
 };
 
 // settings.width/height must be resolved against the scene camera (planJob does this).
+// Bootstrap sizing (common/mlt/bootstrap.h): RenderSettings::bootstrapSamples candidates per path length
+// to start with, doubled while a length's b_k has a relative standard error above 1%, up to 8x.
+constexpr double kBootstrapTargetRelStdErr = 0.01;
+constexpr uint64_t kBootstrapMaxGrowth = 8;
+
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.
 void validateMarkovChainSettings(const RenderSettings& settings);

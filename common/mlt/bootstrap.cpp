@@ -19,40 +19,57 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
     throw std::invalid_argument("bootstrap: need at least 2 candidates per path length, got " +
                                 std::to_string(config.candidatesPerLength));
   if (config.pathLengths.empty()) throw std::invalid_argument("bootstrap: no path lengths");
-  const uint64_t N = config.candidatesPerLength;
+  if (config.maxGrowth < 1) throw std::invalid_argument("bootstrap: maxGrowth must be >= 1");
+  const uint64_t N0 = config.candidatesPerLength;
+  const uint64_t maxN = N0 * config.maxGrowth;
+  if (maxN >= (uint64_t(1) << kCandidateSlotBits))
+    throw std::invalid_argument("bootstrap: too many candidates per path length: " + std::to_string(maxN));
   BootstrapResult result;
   double var = 0;
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;
     lb.pathLength = config.pathLengths[l];
-    lb.firstCandidate = l * N;
-    lb.c.resize(N);
-    const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
-      CandidateFn fn = makeCandidateFn();
-      for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
+    lb.firstCandidate = uint64_t(l) << kCandidateSlotBits;
+    // Evaluates candidates [from, to) of this length in parallel (each writes its own slot).
+    const auto evaluate = [&](uint64_t from, uint64_t to) {
+      lb.c.resize(to);
+      const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
+        CandidateFn fn = makeCandidateFn();
+        for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
+      };
+      if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
+      else body(tbb::blocked_range<uint64_t>(from, to));
+      for (uint64_t i = from; i < to; ++i)
+        if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
+          throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
+                                   " has invalid target value " + std::to_string(lb.c[i]));
     };
-    if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(0, N, 1024), body);
-    else body(tbb::blocked_range<uint64_t>(0, N));
     // Sequential reductions in index order (bit-identical for any thread count).
-    double sum = 0;
-    for (uint64_t i = 0; i < N; ++i) {
-      if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
-        throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
-                                 " has invalid target value " + std::to_string(lb.c[i]));
-      sum += lb.c[i];
+    double varMean = 0;
+    const auto reduce = [&] {
+      const uint64_t N = lb.c.size();
+      double sum = 0;
+      for (uint64_t i = 0; i < N; ++i) sum += lb.c[i];
+      lb.b = sum / double(N);
+      double sq = 0;
+      for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
+      varMean = sq / (double(N) * double(N - 1));  // variance of the mean
+      lb.bStdErr = std::sqrt(varMean);
+    };
+    evaluate(0, N0);
+    reduce();
+    while (config.targetRelStdErr > 0 && lb.b > 0 && lb.bStdErr > config.targetRelStdErr * lb.b && lb.c.size() < maxN) {
+      const uint64_t n = lb.c.size();
+      evaluate(n, std::min(maxN, 2 * n));
+      reduce();
     }
-    lb.b = sum / double(N);
-    double sq = 0;
-    for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
-    const double varMean = sq / (double(N) * double(N - 1));  // variance of the mean
-    lb.bStdErr = std::sqrt(varMean);
     if (lb.b > 0) lb.table = AliasTable(lb.c);
     result.b += lb.b;
     var += varMean;
-    result.candidates += N;
+    result.candidates += lb.c.size();
     if (lb.pathLength >= 0)
       spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.b, lb.bStdErr,
-                   lb.b > 0 ? 100 * lb.bStdErr / lb.b : 0.0, N);
+                   lb.b > 0 ? 100 * lb.bStdErr / lb.b : 0.0, lb.c.size());
     result.lengths.push_back(std::move(lb));
   }
   result.bStdErr = std::sqrt(var);

@@ -4,8 +4,15 @@
 // proportion to c.
 //
 // Candidate indexing: path length slot l (l = 0 for pssmlt; l = k - kMin for mmlt) owns candidates
-// [l * N, (l + 1) * N); candidate i reads IndependentSource(jobSeed, i). A worker replays candidate i
-// with exactly that source.
+// [l << kCandidateSlotBits, (l + 1) << kCandidateSlotBits); its first n candidates are evaluated.
+// Candidate i reads IndependentSource(jobSeed, i). A worker replays candidate i with exactly that source.
+//
+// Sizing (architecture notes: a small bootstrap misestimates b, and an error in b is an error in the
+// image's brightness that no number of mutations removes): a length starts with candidatesPerLength
+// candidates; while its relative standard error exceeds targetRelStdErr, its count doubles, up to
+// maxGrowth x candidatesPerLength. The decision depends only on the candidates' values, so the result is
+// still a pure function of (seed, settings). With every length within the target, b = sum b_k is too
+// (sqrt(sum se_k^2) <= sum se_k <= target * b).
 //
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
@@ -23,8 +30,12 @@ using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
 // Makes a CandidateFn with its own scratch buffers (called once per parallel task).
 using CandidateFnFactory = std::function<CandidateFn()>;
 
+constexpr int kCandidateSlotBits = 40;
+
 struct BootstrapConfig {
-  uint64_t candidatesPerLength = 100000;
+  uint64_t candidatesPerLength = 100000;  // initial count per path length
+  double targetRelStdErr = 0;             // 0: a fixed size
+  uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength per length
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
   bool parallel = true;
 };
