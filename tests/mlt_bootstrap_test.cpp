@@ -143,9 +143,9 @@ TEST(Develop, QuantizationIsUnbiased) {
 namespace mlt {
 namespace {
 
-// Sizing from b's standard error: a rare, bright contribution (relative error ~ sqrt((1-p)/(p N))) makes
-// its length grow until the target is met; a smooth one keeps the initial size; the cap holds; the result
-// is still the same for any thread count.
+// Sizing from b's standard error: while b = sum b_k is not known to 1%, the length with the largest
+// variance doubles. A rare, bright contribution (p = 0.5%, rel. error ~14/sqrt(N) of its b_k = 1) makes its
+// length grow; a smooth one keeps the initial size; the cap holds; any thread count gives the same result.
 BootstrapResult sizedBootstrap(int threads, uint64_t maxGrowth) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   BootstrapConfig bc;
@@ -156,32 +156,34 @@ BootstrapResult sizedBootstrap(int threads, uint64_t maxGrowth) {
   return runBootstrap(bc, [] {
     return [](uint64_t i, int k) {
       const double u = IndependentSource(5, i).valueAt(0, 0);
-      return k == 1 ? (u < 0.02 ? 50.0 : 0.0)  // p = 2%: rel. error 7% at 20k candidates, ~1% needs ~1M
-                    : 1.0 + 0.1 * u;         // rel. error ~0.02%: never grows
+      return k == 1 ? (u < 0.005 ? 200.0 : 0.0) : 1.0 + 0.1 * u;
     };
   });
 }
 
-TEST(Bootstrap, GrowsUntilTheRelativeStandardErrorMeetsTheTarget) {
+double relStdErr(const BootstrapResult& r) { return r.bStdErr / r.b; }
+
+TEST(Bootstrap, GrowsTheNoisiestLengthUntilBIsKnownToTheTarget) {
   const BootstrapResult capped = sizedBootstrap(2, 8);
   EXPECT_EQ(capped.lengths[0].c.size(), 8u * 20000u);  // the cap: not enough to reach 1%
-  EXPECT_GT(capped.lengths[0].bStdErr, 0.01 * capped.lengths[0].b);
+  EXPECT_GT(relStdErr(capped), 0.01);
   EXPECT_EQ(capped.lengths[1].c.size(), 20000u);       // smooth: no growth
   EXPECT_EQ(capped.candidates, 9u * 20000u);
 
   const BootstrapResult wide = sizedBootstrap(2, 64);
   const LengthBootstrap& rare = wide.lengths[0];
-  EXPECT_LE(rare.bStdErr, 0.01 * rare.b);                 // target met ...
-  EXPECT_GT(rare.c.size(), 8u * 20000u);                  // ... by growing (doubling) ...
-  EXPECT_LE(rare.c.size(), 64u * 20000u);
-  // ... and the growth stopped at the first size that met it: half of it did not.
-  double sum = 0, sq = 0;
+  EXPECT_LE(relStdErr(wide), 0.01);                     // target met ...
+  EXPECT_GT(rare.c.size(), 8u * 20000u);                // ... by doubling the rare length ...
+  EXPECT_EQ(wide.lengths[1].c.size(), 20000u);          // ... alone
+  // ... and it stopped at the first size that met it: with half of the rare candidates b was not known.
   const size_t half = rare.c.size() / 2;
+  double sum = 0, sq = 0;
   for (size_t i = 0; i < half; ++i) sum += rare.c[i];
-  const double b = sum / double(half);
-  for (size_t i = 0; i < half; ++i) sq += (rare.c[i] - b) * (rare.c[i] - b);
-  EXPECT_GT(std::sqrt(sq / (double(half) * double(half - 1))), 0.01 * b);
-  EXPECT_NEAR(rare.b, 0.02 * 50.0, 5 * rare.bStdErr);
+  const double bHalf = sum / double(half);
+  for (size_t i = 0; i < half; ++i) sq += (rare.c[i] - bHalf) * (rare.c[i] - bHalf);
+  const double varHalf = sq / (double(half) * double(half - 1)) + wide.lengths[1].bStdErr * wide.lengths[1].bStdErr;
+  EXPECT_GT(std::sqrt(varHalf) / (bHalf + wide.lengths[1].b), 0.01);
+  EXPECT_NEAR(rare.b, 0.005 * 200.0, 5 * rare.bStdErr);
 
   const BootstrapResult one = sizedBootstrap(1, 64);
   EXPECT_EQ(one.lengths[0].c, rare.c);

@@ -21,7 +21,8 @@ struct MarkovChainBootstrap {
 
 // settings.width/height must be resolved against the scene camera (planJob does this).
 // Bootstrap sizing (common/mlt/bootstrap.h): RenderSettings::bootstrapSamples candidates per path length
-// to start with, doubled while a length's b_k has a relative standard error above 1%, up to 8x.
+// to start with; while b's relative standard error is above 1%, the length contributing most to it
+// doubles its candidates, up to 8x.
 constexpr double kBootstrapTargetRelStdErr = 0.01;
 constexpr uint64_t kBootstrapMaxGrowth = 8;
 

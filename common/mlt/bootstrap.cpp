@@ -25,52 +25,70 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
   if (maxN >= (uint64_t(1) << kCandidateSlotBits))
     throw std::invalid_argument("bootstrap: too many candidates per path length: " + std::to_string(maxN));
   BootstrapResult result;
-  double var = 0;
+  std::vector<double> varMean(config.pathLengths.size(), 0.0);  // variance of each b_k
+  // Evaluates candidates [from, to) of length slot l in parallel (each writes its own slot).
+  const auto evaluate = [&](LengthBootstrap& lb, uint64_t from, uint64_t to) {
+    lb.c.resize(to);
+    const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
+      CandidateFn fn = makeCandidateFn();
+      for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
+    };
+    if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
+    else body(tbb::blocked_range<uint64_t>(from, to));
+    for (uint64_t i = from; i < to; ++i)
+      if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
+        throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
+                                 " has invalid target value " + std::to_string(lb.c[i]));
+  };
+  // Sequential reductions in index order (bit-identical for any thread count).
+  const auto reduce = [&](size_t l) {
+    LengthBootstrap& lb = result.lengths[l];
+    const uint64_t N = lb.c.size();
+    double sum = 0;
+    for (uint64_t i = 0; i < N; ++i) sum += lb.c[i];
+    lb.b = sum / double(N);
+    double sq = 0;
+    for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
+    varMean[l] = sq / (double(N) * double(N - 1));  // variance of the mean
+    lb.bStdErr = std::sqrt(varMean[l]);
+  };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;
     lb.pathLength = config.pathLengths[l];
     lb.firstCandidate = uint64_t(l) << kCandidateSlotBits;
-    // Evaluates candidates [from, to) of this length in parallel (each writes its own slot).
-    const auto evaluate = [&](uint64_t from, uint64_t to) {
-      lb.c.resize(to);
-      const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
-        CandidateFn fn = makeCandidateFn();
-        for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
-      };
-      if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
-      else body(tbb::blocked_range<uint64_t>(from, to));
-      for (uint64_t i = from; i < to; ++i)
-        if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
-          throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
-                                   " has invalid target value " + std::to_string(lb.c[i]));
-    };
-    // Sequential reductions in index order (bit-identical for any thread count).
-    double varMean = 0;
-    const auto reduce = [&] {
-      const uint64_t N = lb.c.size();
-      double sum = 0;
-      for (uint64_t i = 0; i < N; ++i) sum += lb.c[i];
-      lb.b = sum / double(N);
-      double sq = 0;
-      for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
-      varMean = sq / (double(N) * double(N - 1));  // variance of the mean
-      lb.bStdErr = std::sqrt(varMean);
-    };
-    evaluate(0, N0);
-    reduce();
-    while (config.targetRelStdErr > 0 && lb.b > 0 && lb.bStdErr > config.targetRelStdErr * lb.b && lb.c.size() < maxN) {
-      const uint64_t n = lb.c.size();
-      evaluate(n, std::min(maxN, 2 * n));
-      reduce();
+    evaluate(lb, 0, N0);
+    result.lengths.push_back(std::move(lb));
+    reduce(l);
+  }
+  // Sizing: while b = sum b_k is not known to the target, double the length that contributes most to its
+  // variance (lowest index on ties). Once that length is at its cap, stop: growing lengths whose variance
+  // is smaller cannot bring the total under the target as fast as it costs (the summary warns instead).
+  for (;;) {
+    double b = 0, var = 0;
+    for (size_t l = 0; l < result.lengths.size(); ++l) {
+      b += result.lengths[l].b;
+      var += varMean[l];
     }
+    if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
+    size_t worst = 0;
+    for (size_t l = 1; l < result.lengths.size(); ++l)
+      if (varMean[l] > varMean[worst]) worst = l;
+    if (result.lengths[worst].c.size() >= maxN) break;
+    LengthBootstrap& lb = result.lengths[worst];
+    const uint64_t n = lb.c.size();
+    evaluate(lb, n, std::min(maxN, 2 * n));
+    reduce(worst);
+  }
+  double var = 0;
+  for (size_t l = 0; l < result.lengths.size(); ++l) {
+    LengthBootstrap& lb = result.lengths[l];
     if (lb.b > 0) lb.table = AliasTable(lb.c);
     result.b += lb.b;
-    var += varMean;
+    var += varMean[l];
     result.candidates += lb.c.size();
     if (lb.pathLength >= 0)
       spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.b, lb.bStdErr,
                    lb.b > 0 ? 100 * lb.bStdErr / lb.b : 0.0, lb.c.size());
-    result.lengths.push_back(std::move(lb));
   }
   result.bStdErr = std::sqrt(var);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -8,11 +8,12 @@
 // Candidate i reads IndependentSource(jobSeed, i). A worker replays candidate i with exactly that source.
 //
 // Sizing (architecture notes: a small bootstrap misestimates b, and an error in b is an error in the
-// image's brightness that no number of mutations removes): a length starts with candidatesPerLength
-// candidates; while its relative standard error exceeds targetRelStdErr, its count doubles, up to
-// maxGrowth x candidatesPerLength. The decision depends only on the candidates' values, so the result is
-// still a pure function of (seed, settings). With every length within the target, b = sum b_k is too
-// (sqrt(sum se_k^2) <= sum se_k <= target * b).
+// image's brightness that no number of mutations removes): every length starts with candidatesPerLength
+// candidates; while b = sum b_k has a relative standard error sqrt(sum se_k^2) / b above targetRelStdErr,
+// the length with the largest variance se_k^2 doubles its count; sizing stops when that length reaches
+// maxGrowth x candidatesPerLength.
+// The decisions depend only on the candidates' values, so the result is still a pure function of (seed,
+// settings).
 //
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.

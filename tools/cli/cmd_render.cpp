@@ -73,7 +73,7 @@ CommandRun setupRender(CLI::App& sub) {
       ->check(CLI::PositiveNumber);
   sub.add_option("--chains", o->chains, "Markov chain methods: number of chains (0 = automatic)")
       ->check(CLI::NonNegativeNumber);
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap samples to start with (per path length for mmlt); doubled while b's relative standard error is above 1%, up to 8x")
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap samples to start with (per path length for mmlt); while b's relative standard error is above 1%, the noisiest length doubles its samples, up to 8x")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")
