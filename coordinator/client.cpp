@@ -139,28 +139,30 @@ JobStatus FarmClient::submitBundle(const std::vector<BundleFile>& files, const s
   return fromProto(resp.status());
 }
 
-JobStatus FarmClient::get(const std::string& jobId) {
+namespace {
+// A unary call that takes a job id and answers a job status (GetJob, CancelJob).
+template <typename Call>
+JobStatus jobCall(const ChannelOptions& opt, const std::string& jobId, const char* rpc, Call call) {
   grpc::ClientContext ctx;
-  prepareContext(ctx, opt_, kShortDeadline);
+  prepareContext(ctx, opt, kShortDeadline);
   v1::JobRef ref;
   ref.set_format_version(wire::kFormatVersion);
   ref.set_job_id(jobId);
   v1::JobStatus resp;
-  grpc::Status s = stub_->GetJob(&ctx, ref, &resp);
-  if (!s.ok()) fail(s, "GetJob");
+  grpc::Status s = call(&ctx, ref, &resp);
+  if (!s.ok()) fail(s, rpc);
   return fromProto(resp);
+}
+}  // namespace
+
+JobStatus FarmClient::get(const std::string& jobId) {
+  return jobCall(opt_, jobId, "GetJob",
+                 [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) { return stub_->GetJob(c, r, o); });
 }
 
 JobStatus FarmClient::cancel(const std::string& jobId) {
-  grpc::ClientContext ctx;
-  prepareContext(ctx, opt_, kShortDeadline);
-  v1::JobRef ref;
-  ref.set_format_version(wire::kFormatVersion);
-  ref.set_job_id(jobId);
-  v1::JobStatus resp;
-  grpc::Status s = stub_->CancelJob(&ctx, ref, &resp);
-  if (!s.ok()) fail(s, "CancelJob");
-  return fromProto(resp);
+  return jobCall(opt_, jobId, "CancelJob",
+                 [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) { return stub_->CancelJob(c, r, o); });
 }
 
 std::vector<JobStatus> FarmClient::list() {

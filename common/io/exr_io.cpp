@@ -117,6 +117,19 @@ void writeFloatRgb(Imf::Header& header, Imf::FrameBuffer& fb, const std::vector<
 
 // ---- Developed images ------------------------------------------------------------------------------
 
+namespace {
+// Writes the frame buffer's slices under `header`; OpenEXR's errors name the file.
+void writeFrame(const std::string& path, const Imf::Header& header, const Imf::FrameBuffer& fb, int height) {
+  try {
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(height);
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot write EXR: ") + e.what());
+  }
+}
+}  // namespace
+
 void writeExr(const std::string& path, int width, int height, const std::vector<Color>& rgb,
               const ImageMetadata& metadata) {
   if (width <= 0 || height <= 0) fail(path, "cannot write an empty image");
@@ -129,13 +142,7 @@ void writeExr(const std::string& path, int width, int height, const std::vector<
   addMetadata(path, header, metadata);
   Imf::FrameBuffer fb;
   writeFloatRgb(header, fb, rgb, width);
-  try {
-    Imf::OutputFile file(path.c_str(), header);
-    file.setFrameBuffer(fb);
-    file.writePixels(height);
-  } catch (const std::exception& e) {
-    fail(path, std::string("cannot write EXR: ") + e.what());
-  }
+  writeFrame(path, header, fb, height);
 }
 
 ExrImage readExr(const std::string& path) {
@@ -228,13 +235,7 @@ void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata
                                  sizeof(uint32_t), sizeof(uint32_t) * size_t(width)));
     }
   }
-  try {
-    Imf::OutputFile file(path.c_str(), header);
-    file.setFrameBuffer(fb);
-    file.writePixels(height);
-  } catch (const std::exception& e) {
-    fail(path, std::string("cannot write EXR: ") + e.what());
-  }
+  writeFrame(path, header, fb, height);
 }
 
 bool isFilmExr(const std::string& path) {
