@@ -81,13 +81,6 @@ bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, Par
   return true;
 }
 
-double previewSplatScale(const JobPlan& plan) {
-  const double P = double(plan.settings.width) * plan.settings.height;
-  if (isMarkovChainMethod(plan.settings.method))
-    return plan.norm.totalMutations ? plan.norm.b * P / double(plan.norm.totalMutations) : 0.0;
-  return plan.settings.spp > 0 ? 1.0 / plan.settings.spp : 0.0;  // light tracing: P / (spp * P)
-}
-
 ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const PartialResult& merged) {
   // The keys of `mltfarm render --in-process` (tools/cli/render_local.cpp), minus wall-clock values that
   // would make the bytes depend on the run, plus the farm's own.
@@ -121,7 +114,7 @@ void writePartialExr(const std::string& path, const JobIdentity& id, const JobPl
   m.numbers["farm.task"] = task;
   m.numbers["farm.tasks"] = double(splitTasks(plan).size());
   m.numbers["farm.wireVersion"] = wire::kFormatVersion;
-  writeFilmExr(path, result.film, m, previewSplatScale(plan));
+  writeFilmExr(path, result.film, m, developImage(plan, result));  // the preview: this task's units, exact
 }
 
 PartialExr readPartialExr(const std::string& path) {

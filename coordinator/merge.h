@@ -65,7 +65,4 @@ PartialExr readPartialExr(const std::string& path);  // std::runtime_error namin
 void mergePartialExrs(const std::vector<std::string>& parts, const std::string& exrPath,
                       const std::string& pngPath);
 
-// Scale that makes a partial film's FLOAT preview channels look like the final image.
-double previewSplatScale(const JobPlan& plan);
-
 }  // namespace mlt::farm

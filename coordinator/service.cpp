@@ -241,8 +241,12 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       const v1::PartialHeader& ph = header.partial();
       if (ph.width() < 1 || ph.height() < 1 || ph.width() > 16384 || ph.height() > 16384)
         throw wire::WireError("partial.width", fmt::format("film {}x{} out of range", ph.width(), ph.height()));
-      if (ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height()))
-        throw wire::WireError("partial.film_bytes", fmt::format("{} for a {}x{} film", ph.film_bytes(), ph.width(), ph.height()));
+      const size_t layers = wire::headerLayers(ph).size();
+      if (layers > wire::kMaxSplatLayer + 1)
+        throw wire::WireError("partial.splat_layers", fmt::format("{} layers", layers));
+      if (ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height(), layers))
+        throw wire::WireError("partial.film_bytes", fmt::format("{} for a {}x{} film with {} splat layers", ph.film_bytes(),
+                                                                ph.width(), ph.height(), layers));
       std::string film;
       film.reserve(ph.film_bytes());
       while (reader->Read(&msg)) {

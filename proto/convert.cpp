@@ -137,7 +137,7 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
   s.mutationsPerPixel = p.mutations_per_pixel();
   requireRange("settings.chains", p.chains(), 0, kMaxChains);
   s.chains = int(p.chains());
-  requireRange("settings.bootstrap_samples", p.bootstrap_samples(), 1, kMaxBootstrap);
+  requireRange("settings.bootstrap_samples", p.bootstrap_samples(), 0, kMaxBootstrap);  // 0 = automatic
   s.bootstrapSamples = int(p.bootstrap_samples());
   requireRange("settings.large_step_prob", p.large_step_prob(), 0.0, 1.0);
   s.largeStepProb = float(p.large_step_prob());
@@ -162,6 +162,24 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
 // ---------------------------------------------------------------------------------------------
 // Plan
 // ---------------------------------------------------------------------------------------------
+v1::TargetSums toProto(const TargetSums& t) {
+  v1::TargetSums p;
+  p.set_n(t.n);
+  p.set_sum(t.sum);
+  p.set_sum_sq(t.sumSq);
+  return p;
+}
+
+TargetSums fromProto(const v1::TargetSums& p, const char* field) {
+  if (!(std::isfinite(p.sum()) && p.sum() >= 0 && std::isfinite(p.sum_sq()) && p.sum_sq() >= 0))
+    throw WireError(field, fmt::format("sums must be finite and >= 0, got {} and {}", p.sum(), p.sum_sq()));
+  TargetSums t;
+  t.n = p.n();
+  t.sum = p.sum();
+  t.sumSq = p.sum_sq();
+  return t;
+}
+
 v1::JobPlan toProto(const JobPlan& plan) {
   v1::JobPlan p;
   p.set_format_version(kFormatVersion);
@@ -175,6 +193,7 @@ v1::JobPlan toProto(const JobPlan& plan) {
   n->set_total_mutations(plan.norm.totalMutations);
   n->set_bootstrap_samples(plan.norm.bootstrapSamples);
   n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
+  for (const TargetSums& t : plan.norm.bootstrapSums) *n->add_bootstrap_sums() = toProto(t);
   for (const WorkUnit& u : plan.units) {
     auto* w = p.add_units();
     w->set_index(u.index);
@@ -203,6 +222,7 @@ JobPlan fromProto(const v1::JobPlan& p) {
   plan.norm.totalMutations = n.total_mutations();
   plan.norm.bootstrapSamples = n.bootstrap_samples();
   plan.norm.bootstrapSeconds = n.bootstrap_seconds();
+  for (const auto& t : n.bootstrap_sums()) plan.norm.bootstrapSums.push_back(fromProto(t, "plan.norm.bootstrap_sums"));
   plan.units.reserve(p.units_size());
   for (int i = 0; i < p.units_size(); ++i) {
     const auto& w = p.units(i);
@@ -239,6 +259,7 @@ v1::ChainStats toProto(const ChainStats& s) {
   p.set_large_accepted(s.largeAccepted);
   p.set_small_proposed(s.smallProposed);
   p.set_small_accepted(s.smallAccepted);
+  for (const TargetSums& t : s.largeStepSums) *p.add_large_step_sums() = toProto(t);
   return p;
 }
 
@@ -250,36 +271,64 @@ ChainStats fromProto(const v1::ChainStats& p) {
   s.largeAccepted = p.large_accepted();
   s.smallProposed = p.small_proposed();
   s.smallAccepted = p.small_accepted();
+  for (const auto& t : p.large_step_sums()) s.largeStepSums.push_back(fromProto(t, "stats.large_step_sums"));
   return s;
 }
 
-size_t filmByteSize(int width, int height) { return size_t(width) * size_t(height) * 7 * sizeof(double); }
+size_t filmByteSize(int width, int height, size_t splatLayers) {
+  return size_t(width) * size_t(height) * (4 + 3 * splatLayers) * sizeof(double);
+}
+
+std::vector<uint32_t> splatLayersOf(const Film& film) {
+  std::vector<uint32_t> layers = {0};
+  for (size_t l = 1; l < film.splatLayerCount(); ++l)
+    if (film.hasSplatLayer(l)) layers.push_back(uint32_t(l));
+  return layers;
+}
 
 std::string encodeFilm(const Film& film) {
+  static_assert(sizeof(RGBd) == 3 * sizeof(double));
   const size_t n = film.pixelCount();
-  std::string out(filmByteSize(film.width(), film.height()), '\0');
+  const std::vector<uint32_t> layers = splatLayersOf(film);
+  std::string out(filmByteSize(film.width(), film.height(), layers.size()), '\0');
   char* dst = out.data();
   if (n) {
     std::memcpy(dst, film.pixelSums().data(), n * sizeof(RGBd));
-    std::memcpy(dst + n * sizeof(RGBd), film.pixelCounts().data(), n * sizeof(double));
-    std::memcpy(dst + n * (sizeof(RGBd) + sizeof(double)), film.splatSums().data(), n * sizeof(RGBd));
+    dst += n * sizeof(RGBd);
+    std::memcpy(dst, film.pixelCounts().data(), n * sizeof(double));
+    dst += n * sizeof(double);
+    for (uint32_t l : layers) {
+      std::memcpy(dst, film.splatLayer(l).data(), n * sizeof(RGBd));
+      dst += n * sizeof(RGBd);
+    }
   }
   return out;
 }
 
-Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite) {
+Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
+                const std::vector<uint32_t>& layers) {
   if (width <= 0 || height <= 0 || width > kMaxFilmSide || height > kMaxFilmSide)
     throw WireError("partial.width", fmt::format("film {}x{} out of range", width, height));
-  if (bytes.size() != filmByteSize(width, height))
-    throw WireError("film_chunk", fmt::format("film {}x{} needs {} bytes, got {}", width, height,
-                                              filmByteSize(width, height), bytes.size()));
-  static_assert(sizeof(RGBd) == 3 * sizeof(double));
+  if (layers.empty() || layers[0] != 0) throw WireError("partial.splat_layers", "must start with layer 0");
+  for (size_t i = 1; i < layers.size(); ++i)
+    if (layers[i] <= layers[i - 1] || layers[i] > kMaxSplatLayer)
+      throw WireError("partial.splat_layers", fmt::format("layers must ascend and be at most {}, got {} after {}",
+                                                          kMaxSplatLayer, layers[i], layers[i - 1]));
+  const size_t expected = filmByteSize(width, height, layers.size());
+  if (bytes.size() != expected)
+    throw WireError("film_chunk", fmt::format("film {}x{} with {} splat layers needs {} bytes, got {}", width, height,
+                                              layers.size(), expected, bytes.size()));
   Film film(width, height);
   const size_t n = film.pixelCount();
   const char* src = bytes.data();
   std::memcpy(film.pixelSums().data(), src, n * sizeof(RGBd));
-  std::memcpy(film.pixelCounts().data(), src + n * sizeof(RGBd), n * sizeof(double));
-  std::memcpy(film.splatSums().data(), src + n * (sizeof(RGBd) + sizeof(double)), n * sizeof(RGBd));
+  src += n * sizeof(RGBd);
+  std::memcpy(film.pixelCounts().data(), src, n * sizeof(double));
+  src += n * sizeof(double);
+  for (uint32_t l : layers) {
+    std::memcpy(film.splatLayer(l).data(), src, n * sizeof(RGBd));
+    src += n * sizeof(RGBd);
+  }
   film.setNonFiniteSamples(nonFinite);
   return film;
 }
@@ -294,14 +343,22 @@ v1::PartialHeader partialHeader(const PartialResult& r) {
   for (uint32_t u : r.units) h.add_units(u);
   h.set_seconds(r.seconds);
   h.set_non_finite(r.film.nonFiniteSamples());
-  h.set_film_bytes(filmByteSize(r.film.width(), r.film.height()));
+  const std::vector<uint32_t> layers = splatLayersOf(r.film);
+  for (uint32_t l : layers) h.add_splat_layers(l);
+  h.set_film_bytes(filmByteSize(r.film.width(), r.film.height(), layers.size()));
   return h;
+}
+
+std::vector<uint32_t> headerLayers(const v1::PartialHeader& h) {
+  std::vector<uint32_t> layers(h.splat_layers().begin(), h.splat_layers().end());
+  if (layers.empty()) layers.push_back(0);  // a header without the field: the one splat layer
+  return layers;
 }
 
 PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes) {
   checkVersion(h.format_version(), "PartialHeader");
   PartialResult r;
-  r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite());
+  r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite(), headerLayers(h));
   r.samples = h.samples();
   r.stats = fromProto(h.stats());
   r.units.assign(h.units().begin(), h.units().end());
@@ -318,6 +375,8 @@ PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film) 
   if (h.width() != film.width() || h.height() != film.height())
     throw WireError("partial.width", fmt::format("header says {}x{}, the film is {}x{}", h.width(), h.height(),
                                                  film.width(), film.height()));
+  if (headerLayers(h) != splatLayersOf(film))
+    throw WireError("partial.splat_layers", "the header's splat layers differ from the film's");
   PartialResult r;
   r.film = std::move(film);
   r.samples = h.samples();

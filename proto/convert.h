@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/job/render_job.h"
 #include "proto/mltfarm.pb.h"
@@ -52,16 +53,24 @@ SubmittedSettings fromProto(const v1::RenderSettings& p);  // validates ranges
 v1::JobPlan toProto(const JobPlan& plan);
 JobPlan fromProto(const v1::JobPlan& p);                  // validates
 
+v1::TargetSums toProto(const TargetSums& t);
+TargetSums fromProto(const v1::TargetSums& p, const char* field);  // validates
 v1::ChainStats toProto(const ChainStats& s);
 ChainStats fromProto(const v1::ChainStats& p);
 
 // A PartialResult travels as a header (everything but the raw sums) + the film's raw bytes.
 v1::PartialHeader partialHeader(const PartialResult& r);
-// Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), splat sums (3/pixel),
+// Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), then the sums of every
+// allocated splat layer in ascending order (3/pixel each; splatLayersOf lists them, layer 0 always),
 // little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
+inline constexpr uint32_t kMaxSplatLayer = 1026;  // 1 + path length slot; max depth is at most 1024
+std::vector<uint32_t> splatLayersOf(const Film& film);
 std::string encodeFilm(const Film& film);
-Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite);
-size_t filmByteSize(int width, int height);
+Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
+                const std::vector<uint32_t>& layers = {0});
+size_t filmByteSize(int width, int height, size_t splatLayers = 1);
+// The header's splat layers ({0} when it lists none).
+std::vector<uint32_t> headerLayers(const v1::PartialHeader& h);
 PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes);  // validates
 // The header alone as bytes (partial EXR metadata) and back, with the film supplied separately.
 std::string partialHeaderBytes(const PartialResult& r);

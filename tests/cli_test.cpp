@@ -141,7 +141,7 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const std::string number = "[0-9.e+-]+";
   EXPECT_TRUE(std::regex_search(r.output, std::regex("b = " + number + " ± " + number + " \\(rel\\. " + number +
-                                                     "%, [0-9]+ bootstrap samples")))
+                                                     "%, from [0-9]+ samples: 8000 bootstrap candidates")))
       << r.output;
   for (int k = 1; k <= 4; ++k)  // the per-length table: k, b_k ± SE, chains, mutations, acceptance
     EXPECT_TRUE(std::regex_search(r.output, std::regex("\\n +" + std::to_string(k) + " +" + number + " ± " + number +
@@ -151,11 +151,14 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
                                                      "%, small steps " + number + "%\\)")))
       << r.output;
   EXPECT_TRUE(std::regex_search(r.output, std::regex("4096 mutations .* = " + number + " mutations/s"))) << r.output;
-  // 2000 candidates per length: b is uncertain by more than 2%.
-  EXPECT_NE(r.output.find("increase --bootstrap"), std::string::npos) << r.output;
-
   const ExrImage img = readExr(out.string());
   const auto& n = img.metadata.numbers;
+  // The warning about b's uncertainty appears exactly when its recorded relative standard error is above 2%.
+  EXPECT_EQ(r.output.find("relative standard error of b") != std::string::npos, n.at("bStdErr") > 0.02 * n.at("b"))
+      << r.output;
+  // b is pooled from the 8000 candidates and every large step (develop.h (D3)).
+  EXPECT_EQ(n.at("bSamples"), 8000.0 + n.at("largeSteps"));
+  EXPECT_EQ(n.at("bootstrapPerLength"), 2000.0);
   for (const char* key : {"b", "bStdErr", "acceptance", "acceptanceLarge", "acceptanceSmall", "b1", "bStdErr4",
                           "chains2", "mutations3", "acceptance4", "mutationsPerSecond"})
     EXPECT_TRUE(n.count(key)) << key;
@@ -175,7 +178,9 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
 TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel) {
   const fs::path dir = tempDir();
   const std::string scene = kScenes + "cornell-box.xml";
-  const RunResult timed = run("render " + scene + kSmallMmlt + "--time 0.5 -o " + (dir / "timed.exr").string());
+  // No --bootstrap: the bootstrap is sized from the budget, and the printed command names its size.
+  const std::string kAutoMmlt = " --method mmlt --width 32 --height 32 --max-depth 4 --seed 5 --threads 2 --in-process ";
+  const RunResult timed = run("render " + scene + kAutoMmlt + "--time 0.5 -o " + (dir / "timed.exr").string());
   ASSERT_EQ(timed.exitCode, 0) << timed.output;
   const ExrImage a = readExr((dir / "timed.exr").string());
   ASSERT_TRUE(a.metadata.numbers.count("mutationsPerPixel")) << timed.output;
@@ -187,9 +192,13 @@ TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel)
   std::smatch match;
   ASSERT_TRUE(std::regex_search(timed.output, match, std::regex("--mutations-per-pixel ([0-9.e+-]+)"))) << timed.output;
   EXPECT_EQ(std::stod(match[1].str()), mpp) << timed.output;
+  std::smatch boot;
+  ASSERT_TRUE(std::regex_search(timed.output, boot, std::regex("--bootstrap ([0-9]+) instead of --time"))) << timed.output;
+  EXPECT_EQ(std::stod(boot[1].str()), a.metadata.numbers.at("bootstrapPerLength"));
+  EXPECT_GE(a.metadata.numbers.at("bootstrapPerLength"), 4096.0);  // kMinBootstrapPerLength
 
-  const RunResult again = run("render " + scene + kSmallMmlt + "--mutations-per-pixel " + match[1].str() + " -q -o " +
-                              (dir / "again.exr").string());
+  const RunResult again = run("render " + scene + kAutoMmlt + "--mutations-per-pixel " + match[1].str() +
+                              " --bootstrap " + boot[1].str() + " -q -o " + (dir / "again.exr").string());
   ASSERT_EQ(again.exitCode, 0) << again.output;
   const ExrImage b = readExr((dir / "again.exr").string());
   EXPECT_EQ(b.metadata.numbers.at("mutationsPerPixel"), mpp);

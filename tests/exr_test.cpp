@@ -4,6 +4,8 @@
 #include "common/io/png_io.h"
 
 #include <gtest/gtest.h>
+
+#include <cstring>
 #include <png.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -103,6 +105,28 @@ TEST(Exr, PartialFilmRoundTripIsBitExact) {
   const std::vector<Color> expected = film.develop(0.5);
   ASSERT_EQ(preview.rgb.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(preview.rgb[i].g, expected[i].g);
+}
+
+TEST(Exr, PartialFilmKeepsEverySplatLayerBitExactly) {
+  Film film(5, 3);
+  Pcg32 rng(7, 1);
+  for (int i = 0; i < 200; ++i)
+    for (size_t layer : {size_t(0), size_t(2), size_t(31)})
+      film.addSplat(Vec2(rng.uniform() * 5, rng.uniform() * 3), Color(rng.uniform() / 7.f), layer);
+  const std::string path = tempPath("layers.exr");
+  const std::vector<double> scales = {1, 0, 0.5, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+                                      0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.25};
+  writeFilmExr(path, film, {}, film.develop(scales));
+  const FilmExr back = readFilmExr(path);
+  ASSERT_EQ(back.film.splatLayerCount(), 32u);
+  for (size_t l = 0; l < 32; ++l) {
+    ASSERT_EQ(back.film.hasSplatLayer(l), film.hasSplatLayer(l)) << l;
+    if (!film.hasSplatLayer(l)) continue;
+    EXPECT_EQ(std::memcmp(back.film.splatLayer(l).data(), film.splatLayer(l).data(), film.pixelCount() * sizeof(RGBd)), 0)
+        << "layer " << l;
+  }
+  const std::vector<Color> a = film.develop(scales), b = back.film.develop(scales);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
 }
 
 TEST(Exr, ErrorsNameTheFile) {

@@ -175,11 +175,13 @@ TEST(FarmRpc, FullHdFilmTravelsInChunksUnderTheDefaultMessageLimit) {
     r.film.pixelSums()[i] = {double(i) * 1e-3, 1.0 / double(i + 1), -double(i)};
     r.film.pixelCounts()[i] = double(i % 97);
     r.film.splatSums()[i] = {std::sqrt(double(i)), double(i) * 3.25, 0.1 * double(i % 13)};
+    r.film.splatLayer(4)[i] = {1.0 / double(i + 3), double(i % 7), -0.5 * double(i)};  // a chain length's layer
   }
   r.samples = 123456789;
   r.units = {3, 4, 5};
   r.stats.largeProposed = 42;
-  const size_t bytes = wire::filmByteSize(1920, 1080);
+  r.stats.largeStepSums = {{}, {}, {}, {42, 1.0 / 3.0, 0.125}};
+  const size_t bytes = wire::filmByteSize(1920, 1080, 2);
   ASSERT_GT(bytes, size_t(4) << 20) << "the film must exceed the 4 MiB message limit for this test to mean anything";
   size_t chunks = 0;
   UploadReply reply = uploadPartial(*stub, co, {"w", "l", "job-1", 7}, r, &chunks);
@@ -192,6 +194,8 @@ TEST(FarmRpc, FullHdFilmTravelsInChunksUnderTheDefaultMessageLimit) {
   EXPECT_EQ(handler.received.samples, r.samples);
   EXPECT_EQ(handler.received.units, r.units);
   EXPECT_EQ(handler.received.stats.largeProposed, 42u);
+  EXPECT_TRUE(handler.received.film.hasSplatLayer(4));
+  EXPECT_EQ(handler.received.stats.largeStepSums, r.stats.largeStepSums);
 
   // A single message carrying the whole film is refused by the default limit: chunking is what works.
   grpc::ClientContext ctx;

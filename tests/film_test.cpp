@@ -100,3 +100,32 @@ TEST(Film, RejectsEmptySize) {
 
 }  // namespace
 }  // namespace mlt
+
+namespace mlt {
+namespace {
+
+TEST(Film, SplatLayersMergeAndDevelopEachWithItsOwnScale) {
+  Film a(3, 2), b(3, 2);
+  a.addSplat({0.5f, 0.5f}, Color(1), 0);
+  a.addSplat({0.5f, 0.5f}, Color(2), 3);  // layer 3 only on a
+  b.addSplat({0.5f, 0.5f}, Color(4), 5);  // layer 5 only on b
+  b.addSplat({0.5f, 0.5f}, Color(8), 3);
+  EXPECT_FALSE(a.hasSplatLayer(1));
+  EXPECT_TRUE(a.hasSplatLayer(3));
+  a.merge(b);
+  EXPECT_EQ(a.splatLayer(3)[0].r, 10.0);
+  EXPECT_EQ(a.splatLayer(5)[0].g, 4.0);
+  EXPECT_FALSE(a.hasSplatLayer(4));
+  // Pixel 0: 1 * s0 + 10 * s3 + 4 * s5.
+  const std::vector<Color> img = a.develop({0.5, 0, 0, 0.25, 0, 2});
+  EXPECT_FLOAT_EQ(img[0].r, 0.5f + 2.5f + 8.f);
+  EXPECT_FLOAT_EQ(img[1].r, 0.f);
+  // A layer that holds sums but has no scale is an error, not a silently dropped component.
+  EXPECT_THROW(a.develop({1, 1, 1, 1}), std::invalid_argument);
+  EXPECT_THROW(a.develop(1.0), std::invalid_argument);
+  const Film& c = a;
+  EXPECT_THROW(c.splatLayer(4), std::out_of_range);
+}
+
+}  // namespace
+}  // namespace mlt

@@ -27,7 +27,18 @@ Film::Film(int width, int height) : width_(width), height_(height) {
                                 std::to_string(height));
   pixelSum_.assign(pixelCount(), RGBd{});
   pixelCount_.assign(pixelCount(), 0.0);
-  splatSum_.assign(pixelCount(), RGBd{});
+  splat_[0].assign(pixelCount(), RGBd{});
+}
+
+std::vector<RGBd>& Film::splatLayer(size_t layer) {
+  if (layer >= splat_.size()) splat_.resize(layer + 1);
+  if (splat_[layer].empty()) splat_[layer].assign(pixelCount(), RGBd{});
+  return splat_[layer];
+}
+
+const std::vector<RGBd>& Film::splatLayer(size_t layer) const {
+  if (!hasSplatLayer(layer)) throw std::out_of_range("Film: no splat layer " + std::to_string(layer));
+  return splat_[layer];
 }
 
 void Film::addSample(Vec2 pRaster, const Color& L) {
@@ -41,14 +52,15 @@ void Film::addSample(Vec2 pRaster, const Color& L) {
   pixelCount_[i] += 1.0;
 }
 
-void Film::addSplat(Vec2 pRaster, const Color& v) {
+void Film::addSplat(Vec2 pRaster, const Color& v, size_t layer) {
   if (!v.isFinite()) {
     ++nonFinite_;
     return;
   }
   const long i = pixelIndex(pRaster, width_, height_);
   if (i < 0) return;
-  splatSum_[i].add(v);
+  std::vector<RGBd>& buffer = layer == 0 ? splat_[0] : splatLayer(layer);
+  buffer[i].add(v);
 }
 
 void Film::merge(const Film& other) {
@@ -59,12 +71,19 @@ void Film::merge(const Film& other) {
   for (size_t i = 0; i < pixelSum_.size(); ++i) {
     pixelSum_[i] += other.pixelSum_[i];
     pixelCount_[i] += other.pixelCount_[i];
-    splatSum_[i] += other.splatSum_[i];
+  }
+  for (size_t l = 0; l < other.splat_.size(); ++l) {
+    if (!other.hasSplatLayer(l)) continue;
+    std::vector<RGBd>& mine = splatLayer(l);
+    const std::vector<RGBd>& theirs = other.splat_[l];
+    for (size_t i = 0; i < mine.size(); ++i) mine[i] += theirs[i];
   }
   nonFinite_ += other.nonFinite_;
 }
 
-std::vector<Color> Film::develop(double splatScale) const {
+std::vector<Color> Film::develop(const std::vector<double>& layerScales) const {
+  for (size_t l = layerScales.size(); l < splat_.size(); ++l)
+    if (hasSplatLayer(l)) throw std::invalid_argument("Film::develop: splat layer " + std::to_string(l) + " has no scale");
   std::vector<Color> out(pixelCount());
   for (size_t i = 0; i < out.size(); ++i) {
     double r = 0, g = 0, b = 0;
@@ -74,9 +93,14 @@ std::vector<Color> Film::develop(double splatScale) const {
       g = pixelSum_[i].g * inv;
       b = pixelSum_[i].b * inv;
     }
-    r += splatScale * splatSum_[i].r;
-    g += splatScale * splatSum_[i].g;
-    b += splatScale * splatSum_[i].b;
+    // Layers in index order, so that the same sums develop to the same floats everywhere.
+    for (size_t l = 0; l < splat_.size(); ++l) {
+      if (splat_[l].empty()) continue;
+      const double scale = layerScales[l];
+      r += scale * splat_[l][i].r;
+      g += scale * splat_[l][i].g;
+      b += scale * splat_[l][i].b;
+    }
     out[i] = Color(static_cast<float>(r), static_cast<float>(g), static_cast<float>(b));
   }
   return out;

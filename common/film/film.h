@@ -1,6 +1,6 @@
 // The film: raw sums in double, normalized only when developed, so that partial films merge exactly.
 //
-// Two buffers, both with a box reconstruction filter of one pixel (each sample lands in one pixel):
+// Two kinds of buffer, both with a box reconstruction filter of one pixel (each sample lands in one pixel):
 //  - pixel estimates: sum of sample values and the number of samples per pixel (camera-driven samples,
 //    pt and bdpt's t>=2 strategies). Developed as sum / count.
 //  - splats: sum of splatted values anywhere on the film (light tracing, bdpt's t=1, every MLT splat).
@@ -9,6 +9,11 @@
 //        over the whole film, see render/camera.h)
 //      Markov chains:                                               b * P / M (M = total mutations;
 //        derivation in mlt/develop.h)
+//    There is one splat buffer per estimator *component* (a "layer"), each developed with its own scale:
+//    layer 0 is splatSums() (light tracing, bdpt's t = 1, a Markov chain job's direct pass); a Markov
+//    chain job splats path length slot l into layer 1 + l, so that b_k, known only once every chain has
+//    reported its large steps, is applied when the image is developed and never inside a chain. Layers
+//    other than 0 are allocated on first use (a chain's partial film holds only its own).
 // Accumulation order matters for bit-identical results: merge() adds another film element-wise, and
 // callers merge in a fixed order (chain index) to make the sums independent of scheduling.
 #pragma once
@@ -37,21 +42,31 @@ class Film {
 
   // A camera sample for the pixel containing pRaster (pixels). Non-finite values are counted and dropped.
   void addSample(Vec2 pRaster, const Color& L);
-  // A splat anywhere on the film. Non-finite values are counted and dropped; off-film splats are ignored.
-  void addSplat(Vec2 pRaster, const Color& v);
-  // Element-wise sum; sizes must match (throws std::invalid_argument otherwise).
+  // A splat anywhere on the film, into splat layer `layer`. Non-finite values are counted and dropped;
+  // off-film splats are ignored.
+  void addSplat(Vec2 pRaster, const Color& v, size_t layer = 0);
+  // Element-wise sum of every buffer (layers missing on one side count as zero); sizes must match
+  // (throws std::invalid_argument otherwise).
   void merge(const Film& other);
 
-  // Developed linear RGB, row-major from the top-left: pixel sum / count + splatScale * splat sum.
-  std::vector<Color> develop(double splatScale) const;
+  // Developed linear RGB, row-major from the top-left: pixel sum / count + sum over layers l of
+  // layerScales[l] * splat layer l. Throws std::invalid_argument if an allocated layer has no scale.
+  std::vector<Color> develop(const std::vector<double>& layerScales) const;
+  std::vector<Color> develop(double splatScale) const { return develop(std::vector<double>{splatScale}); }
+
+  // Splat layers: layers [0, splatLayerCount()) exist as slots; hasSplatLayer tells which hold a buffer.
+  size_t splatLayerCount() const { return splat_.size(); }
+  bool hasSplatLayer(size_t layer) const { return layer < splat_.size() && !splat_[layer].empty(); }
+  std::vector<RGBd>& splatLayer(size_t layer);  // allocates a zero layer if absent
+  const std::vector<RGBd>& splatLayer(size_t layer) const;  // throws std::out_of_range if absent
 
   // Raw access (for I/O and the wire).
   std::vector<RGBd>& pixelSums() { return pixelSum_; }
   std::vector<double>& pixelCounts() { return pixelCount_; }
-  std::vector<RGBd>& splatSums() { return splatSum_; }
+  std::vector<RGBd>& splatSums() { return splat_[0]; }
   const std::vector<RGBd>& pixelSums() const { return pixelSum_; }
   const std::vector<double>& pixelCounts() const { return pixelCount_; }
-  const std::vector<RGBd>& splatSums() const { return splatSum_; }
+  const std::vector<RGBd>& splatSums() const { return splat_[0]; }
   uint64_t nonFiniteSamples() const { return nonFinite_; }
   void setNonFiniteSamples(uint64_t n) { nonFinite_ = n; }
 
@@ -59,7 +74,7 @@ class Film {
   int width_ = 0, height_ = 0;
   std::vector<RGBd> pixelSum_;
   std::vector<double> pixelCount_;
-  std::vector<RGBd> splatSum_;
+  std::vector<std::vector<RGBd>> splat_ = std::vector<std::vector<RGBd>>(1);  // [0] allocated by the constructor
   uint64_t nonFinite_ = 0;
 };
 

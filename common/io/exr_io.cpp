@@ -12,6 +12,7 @@
 #include <ImfStringAttribute.h>
 #include <ImfTestFile.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <filesystem>
@@ -178,32 +179,72 @@ ExrImage readExr(const std::string& path) {
 
 namespace {
 
-// The raw doubles of a film as (channel base name, pointer to the first double, stride in doubles).
+// The raw doubles of a film as (channel base name, component inside the element, doubles per element,
+// buffer): pixel sums, counts, then every allocated splat layer (layer 0 "splat", layer l "splat<l>").
 struct DoubleField {
   std::string name;
   size_t offset;  // index of the component inside the element
   size_t stride;  // doubles per element
+  int layer;      // -2: pixel sums, -1: counts, >= 0: splat layer
 };
 
-const std::vector<DoubleField>& filmFields() {
-  static const std::vector<DoubleField> fields = {
-      {"pixel.R", 0, 3}, {"pixel.G", 1, 3}, {"pixel.B", 2, 3}, {"count", 0, 1},
-      {"splat.R", 0, 3}, {"splat.G", 1, 3}, {"splat.B", 2, 3}};
+std::vector<DoubleField> filmFields(const std::vector<size_t>& layers) {
+  std::vector<DoubleField> fields = {{"pixel.R", 0, 3, -2}, {"pixel.G", 1, 3, -2}, {"pixel.B", 2, 3, -2}, {"count", 0, 1, -1}};
+  for (size_t l : layers) {
+    const std::string base = l == 0 ? "splat" : "splat" + std::to_string(l);
+    for (size_t c = 0; c < 3; ++c) fields.push_back({base + "." + "RGB"[c], c, 3, int(l)});
+  }
   return fields;
 }
 
-// Element 0 of each field as a flat double array: the pixel sums, counts and splat sums.
-const double* fieldData(const Film& film, size_t field) {
+std::vector<size_t> allocatedLayers(const Film& film) {
+  std::vector<size_t> layers = {0};
+  for (size_t l = 1; l < film.splatLayerCount(); ++l)
+    if (film.hasSplatLayer(l)) layers.push_back(l);
+  return layers;
+}
+
+// The splat layers a partial film EXR holds, from its channel names ("splat<l>.R.hi"; layer 0 is "splat").
+std::vector<size_t> layersInHeader(const std::string& path, const Imf::Header& header) {
+  std::vector<size_t> layers = {0};
+  for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+    const std::string name = it.name();
+    const std::string prefix = "splat", suffix = ".R.hi";
+    if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (digits.empty() || digits.size() > 4 || digits.find_first_not_of("0123456789") != std::string::npos ||
+        digits[0] == '0')
+      fail(path, "unexpected channel " + name);
+    layers.push_back(size_t(std::stoul(digits)));
+  }
+  std::sort(layers.begin(), layers.end());
+  return layers;
+}
+
+double* fieldData(Film& film, const DoubleField& f) {
   static_assert(sizeof(RGBd) == 3 * sizeof(double));
-  if (field < 3) return reinterpret_cast<const double*>(film.pixelSums().data());
-  if (field == 3) return film.pixelCounts().data();
-  return reinterpret_cast<const double*>(film.splatSums().data());
+  if (f.layer == -2) return reinterpret_cast<double*>(film.pixelSums().data());
+  if (f.layer == -1) return film.pixelCounts().data();
+  return reinterpret_cast<double*>(film.splatLayer(size_t(f.layer)).data());
+}
+const double* fieldData(const Film& film, const DoubleField& f) {
+  if (f.layer == -2) return reinterpret_cast<const double*>(film.pixelSums().data());
+  if (f.layer == -1) return film.pixelCounts().data();
+  return reinterpret_cast<const double*>(film.splatLayer(size_t(f.layer)).data());
 }
 
 }  // namespace
 
 void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
                   double previewSplatScale) {
+  if (film.width() <= 0 || film.height() <= 0) fail(path, "cannot write an empty film");
+  writeFilmExr(path, film, metadata, film.develop(previewSplatScale));
+}
+
+void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
+                  const std::vector<Color>& preview) {
   const int width = film.width(), height = film.height();
   if (width <= 0 || height <= 0) fail(path, "cannot write an empty film");
   const size_t n = film.pixelCount();
@@ -214,15 +255,15 @@ void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata
   header.insert(kFormatVersionAttr, Imf::IntAttribute(kPartialFilmVersion));
   header.insert(kNonFiniteAttr, Imf::DoubleAttribute(double(film.nonFiniteSamples())));
 
+  if (preview.size() != n) fail(path, "preview has " + std::to_string(preview.size()) + " pixels, the film " + std::to_string(n));
   Imf::FrameBuffer fb;
-  const std::vector<Color> preview = film.develop(previewSplatScale);
   writeFloatRgb(header, fb, preview, width);
 
   // hi/lo words of every double, one plane per channel.
-  const auto& fields = filmFields();
+  const std::vector<DoubleField> fields = filmFields(allocatedLayers(film));
   std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
   for (size_t f = 0; f < fields.size(); ++f) {
-    const double* data = fieldData(film, f);
+    const double* data = fieldData(film, fields[f]);
     for (size_t i = 0; i < n; ++i) {
       const uint64_t bits = std::bit_cast<uint64_t>(data[i * fields[f].stride + fields[f].offset]);
       words[2 * f][i] = uint32_t(bits >> 32);
@@ -265,7 +306,7 @@ FilmExr readFilmExr(const std::string& path) {
       fail(path, "size mismatch: data window differs from display window");
 
     const size_t n = size_t(s.width) * size_t(s.height);
-    const auto& fields = filmFields();
+    const std::vector<DoubleField> fields = filmFields(layersInHeader(path, header));
     std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
     Imf::FrameBuffer fb;
     for (size_t f = 0; f < fields.size(); ++f) {
@@ -284,7 +325,7 @@ FilmExr readFilmExr(const std::string& path) {
 
     FilmExr out{Film(s.width, s.height), readMetadata(header, false)};
     for (size_t f = 0; f < fields.size(); ++f) {
-      double* data = const_cast<double*>(fieldData(out.film, f));
+      double* data = fieldData(out.film, fields[f]);
       for (size_t i = 0; i < n; ++i) {
         const uint64_t bits = (uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i];
         data[i * fields[f].stride + fields[f].offset] = std::bit_cast<double>(bits);

@@ -4,8 +4,9 @@
 //    bit-exactly as two UINT channels holding the high and low 32 bits of its IEEE-754 bit pattern:
 //      pixel.{R,G,B}.{hi,lo}   weighted pixel sums        (Film::pixelSums)
 //      count.{hi,lo}           pixel sample counts        (Film::pixelCounts)
-//      splat.{R,G,B}.{hi,lo}   splat sums                 (Film::splatSums)
-//    plus FLOAT R, G, B: a developed preview (Film::develop(previewSplatScale)), so any EXR viewer shows
+//      splat.{R,G,B}.{hi,lo}   splat sums                 (Film::splatSums, layer 0)
+//      splat<l>.{R,G,B}.{hi,lo} splat layer l > 0, for every allocated layer (Film::splatLayer)
+//    plus FLOAT R, G, B: a developed preview supplied by the caller, so any EXR viewer shows
 //    something sensible. The header carries the caller's metadata plus `mltfarm.format` ("partial-film")
 //    and `mltfarm.formatVersion`, and the film's non-finite sample count.
 // The keys mltfarm.format, mltfarm.formatVersion and mltfarm.nonFiniteSamples and OpenEXR's own
@@ -48,6 +49,9 @@ struct FilmExr {
 // sums are stored unscaled.
 void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
                   double previewSplatScale);
+// The same with the preview image given (a film with several splat layers develops with several scales).
+void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
+                  const std::vector<Color>& preview);
 FilmExr readFilmExr(const std::string& path);
 // True if the file is an EXR written by writeFilmExr (cheap: reads the header only).
 bool isFilmExr(const std::string& path);

@@ -44,7 +44,9 @@ uint64_t defaultChains(uint64_t totalMutations) {
 
 bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > u.sampleBegin; }
 
-std::vector<int> chainLengths(const RenderSettings& s) {
+}  // namespace
+
+std::vector<int> chainPathLengths(const RenderSettings& s) {
   if (s.method != Method::MMLT) return {-1};
   if (s.integrator.maxDepth < 1)
     throw std::invalid_argument("settings: mmlt needs a finite max depth >= 1 (got " +
@@ -54,6 +56,41 @@ std::vector<int> chainLengths(const RenderSettings& s) {
   for (int k = mmltMinLength(s.separateDirect); k <= s.integrator.maxDepth; ++k) lengths.push_back(k);
   return lengths;
 }
+
+uint64_t bootstrapPerLengthFor(const RenderSettings& s, double candidatesAffordable) {
+  if (s.bootstrapSamples > 0) return uint64_t(s.bootstrapSamples);
+  const double lengths = double(std::max<size_t>(chainPathLengths(s).size(), 1));
+  const double perLength = candidatesAffordable / lengths;
+  uint64_t n = kMinBootstrapPerLength;
+  while (n < kMaxBootstrapPerLength && double(2 * n) <= perLength) n *= 2;  // largest power of two that fits
+  return n;
+}
+
+uint64_t bootstrapPerLength(const RenderSettings& s) {
+  const double M = s.mutationsPerPixel * double(s.width) * double(s.height);
+  return bootstrapPerLengthFor(s, std::isfinite(M) && M > 0 ? kBootstrapShare * M : 0.0);
+}
+
+RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
+  RefinedB r;
+  const size_t slots = std::max(norm.bootstrapSums.size(), merged.largeStepSums.size());
+  r.perSlot.resize(slots);
+  double var = 0;
+  for (size_t l = 0; l < slots; ++l) {
+    const TargetSums boot = l < norm.bootstrapSums.size() ? norm.bootstrapSums[l] : TargetSums{};
+    const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
+    r.perSlot[l] = pooledB(boot, large);
+    r.total.b += r.perSlot[l].b;
+    r.total.samples += r.perSlot[l].samples;
+    var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
+  }
+  r.total.stdErr = std::sqrt(var);
+  return r;
+}
+
+namespace {
+
+std::vector<int> chainLengths(const RenderSettings& s) { return chainPathLengths(s); }
 
 KelemenParams kelemenParams(const RenderSettings& s) {
   KelemenParams p;
@@ -90,7 +127,8 @@ void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
   if (b.integrator.heuristic != s.integrator.heuristic)
     differs("MIS heuristic", int(b.integrator.heuristic), int(s.integrator.heuristic));
   if (b.separateDirect != s.separateDirect) differs("separateDirect", b.separateDirect, s.separateDirect);
-  if (b.bootstrapSamples != s.bootstrapSamples) differs("bootstrap samples", b.bootstrapSamples, s.bootstrapSamples);
+  if (bootstrapPerLength(b) != bootstrapPerLength(s))
+    differs("bootstrap samples per length", bootstrapPerLength(b), bootstrapPerLength(s));
 }
 
 }  // namespace
@@ -98,8 +136,9 @@ void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
 void validateMarkovChainSettings(const RenderSettings& s) {
   if (!isMarkovChainMethod(s.method))
     throw std::invalid_argument(std::string("settings: method ") + methodName(s.method) + " is not a Markov chain method");
-  if (s.bootstrapSamples < 2)
-    throw std::invalid_argument("settings: bootstrap samples must be >= 2, got " + std::to_string(s.bootstrapSamples));
+  if (s.bootstrapSamples != 0 && s.bootstrapSamples < 2)
+    throw std::invalid_argument("settings: bootstrap samples must be >= 2 (or 0: automatic), got " +
+                                std::to_string(s.bootstrapSamples));
   if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
   if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
@@ -114,12 +153,11 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
 
   MarkovChainBootstrap out;
   out.settings = s;
+  out.settings.bootstrapSamples = int(bootstrapPerLength(s));
   const std::vector<int> lengths = chainLengths(s);
   if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
   BootstrapConfig bc;
-  bc.candidatesPerLength = uint64_t(s.bootstrapSamples);
-  bc.targetRelStdErr = kBootstrapTargetRelStdErr;
-  bc.maxGrowth = kBootstrapMaxGrowth;
+  bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
   const uint64_t seed = s.seed;
   out.result = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {
@@ -149,6 +187,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
 
   JobPlan plan;
   plan.settings = s;
+  plan.settings.bootstrapSamples = bootstrap.settings.bootstrapSamples;  // resolved
   const uint64_t P = uint64_t(s.width) * uint64_t(s.height);
   const uint64_t M = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(s.mutationsPerPixel * double(P))));
   const std::vector<int> lengths = chainLengths(s);
@@ -174,6 +213,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   } else {
     norm.mutationsPerLength.assign(1, 0);
   }
+  norm.bootstrapSums.assign(norm.mutationsPerLength.size(), TargetSums{});
   uint32_t index = 0;
   for (size_t l = 0; l < boot.lengths.size(); ++l) {
     const LengthBootstrap& lb = boot.lengths[l];
@@ -183,6 +223,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
       norm.bkStdErr[slot] = lb.bStdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
+    for (double c : lb.c) norm.bootstrapSums[slot].add(c);  // in index order: deterministic
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {
@@ -209,8 +250,10 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
     }
     plan.settings.samplesPerUnit = d.settings.samplesPerUnit;
   }
-  spdlog::info("{}: b = {:.6g} +- {:.3g}, {} chains, {} mutations ({} per pixel){}", methodName(s.method), norm.b,
-               norm.bStdErr, plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
+  spdlog::info("{}: bootstrap b = {:.6g} +- {:.3g} ({} candidates, {:.3f} s; refined by the chains' large steps), {} "
+               "chains, {} mutations ({} per pixel){}",
+               methodName(s.method), norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
+               plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
                s.separateDirect ? ", direct light by bdpt" : "");
   return plan;
 }
@@ -219,17 +262,13 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   const Normalization& norm = plan.norm;
-  const size_t P = size_t(s.width) * size_t(s.height);
 
   if (isDirectUnit(unit)) {
     if (!s.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
 #if MLT_JOB_HAVE_EVALUATORS
     const JobPlan d = directPlan(plan);
     const auto evaluator = makeEvaluator(scene, Method::BDPT, d.settings.integrator);
-    PartialResult r = runSampleUnit(*evaluator, d, unit);
-    const double pre = directSplatPrescale(norm.b, norm.totalMutations, uint64_t(s.spp) * P);  // (D3)
-    for (RGBd& v : r.film.splatSums()) { v.r *= pre; v.g *= pre; v.b *= pre; }
-    quantizeFilm(r.film, s.seed, unit.index);
+    PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
     r.samples = 0;  // samples count mutations in a Markov chain job
     return r;
 #else
@@ -245,7 +284,7 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
   const int slot = k < 0 ? 0 : k;
   if (slot >= int(norm.mutationsPerLength.size()) || norm.mutationsPerLength[slot] == 0)
     throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": the plan has no mutations for path length " + std::to_string(k));
-  const double bChain = s.method == Method::MMLT ? norm.bk[slot] : norm.b;
+  const double bChain = s.method == Method::MMLT ? norm.bk[slot] : norm.b;  // Kelemen MIS weights only
 
   PartialResult result;
   result.film = Film(s.width, s.height);
@@ -266,10 +305,7 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
 
   PssState state(source);
   MethodChainTarget chainTarget(target, source, k);
-  const double rk = s.method == Method::MMLT
-                        ? lengthWeightCorrection(norm.bk[slot], norm.mutationsPerLength[slot], norm.b, norm.totalMutations)
-                        : 1.0;  // (D2)
-  FilmSink sink(result.film, rk);
+  FilmSink sink(result.film, chainLayer(size_t(slot)));  // scaled by b_k P / M_k only when developed (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
@@ -288,27 +324,35 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
   st.largeAccepted = counts.accepted[int(MutationType::Large)];
   st.smallProposed = counts.proposed[int(MutationType::Small)];
   st.smallAccepted = counts.accepted[int(MutationType::Small)];
+  st.largeStepSums.assign(slot + 1, TargetSums{});
+  st.largeStepSums[slot] = counts.largeSteps;
+  quantizeSums(st.largeStepSums[slot], s.seed, unit.index, uint64_t(slot));
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
 std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged) {
-  const size_t P = size_t(plan.settings.width) * size_t(plan.settings.height);
+  const RenderSettings& s = plan.settings;
+  const size_t P = size_t(s.width) * size_t(s.height);
   if (merged.film.pixelCount() == 0) {
     if (plan.units.empty()) return std::vector<Color>(P);  // b = 0: nothing carries light
     throw std::invalid_argument("developImage: no work units merged");
   }
-  // (D1) with the planned M when every chain is merged; a preview of some chains uses the mutations it
-  // holds (pssmlt: each chain is stationary, so any subset estimates the image).
-  uint64_t plannedChainMutations = 0;
-  for (const WorkUnit& u : plan.units) plannedChainMutations += u.mutations;
-  uint64_t M = plan.norm.totalMutations;
-  if (merged.samples != plannedChainMutations) {
-    spdlog::warn("developImage: {} of {} planned mutations merged; developing a preview", merged.samples,
-                 plannedChainMutations);
-    M = merged.samples;
-  }
-  return merged.film.develop(chainSplatScale(plan.norm.b, M, merged.film.pixelCount()));
+  // Layer 0: the direct pass's t = 1 splats, P / N with N the light paths of the direct units merged.
+  uint64_t directLightPaths = 0;
+  for (uint32_t i : merged.units)
+    if (i < plan.units.size() && isDirectUnit(plan.units[i]))
+      directLightPaths += uint64_t(plan.units[i].sampleEnd - plan.units[i].sampleBegin) * P;
+  std::vector<double> scales(merged.film.splatLayerCount(), 0.0);
+  if (directLightPaths > 0) scales[0] = double(P) / double(directLightPaths);
+  // Layer 1 + slot: (D2) with b_k pooled from bootstrap and large steps (D3) and M_k the mutations of that
+  // length merged (all of them once every chain is in; a preview's are a subset, still exact per length).
+  const RefinedB refined = refinedB(plan.norm, merged.stats);
+  const auto& M = merged.stats.proposedPerLength;
+  for (size_t slot = 0; slot < M.size() && chainLayer(slot) < scales.size(); ++slot)
+    if (M[slot] > 0 && slot < refined.perSlot.size())
+      scales[chainLayer(slot)] = chainSplatScale(refined.perSlot[slot].b, M[slot], P);
+  return merged.film.develop(scales);
 }
 
 }  // namespace mlt

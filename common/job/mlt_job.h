@@ -7,24 +7,43 @@
 
 #include "common/job/render_job.h"
 #include "common/mlt/bootstrap.h"
+#include "common/mlt/develop.h"
 
 namespace mlt {
 
 // The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
-// method, width/height, integrator, separateDirect, bootstrapSamples). mutationsPerPixel, chains, the
-// mutation kernel and the large-step probability do not enter it, so one bootstrap serves plans with any
-// number of mutations (a time-budgeted render plans twice from one bootstrap; see render_local.cpp).
+// method, width/height, integrator, separateDirect, bootstrapSamples resolved by bootstrapPerLength).
+// The chain count, the mutation kernel and the large-step probability do not enter it, so one bootstrap
+// serves plans with any of those (a time-budgeted render plans twice from one bootstrap, with its
+// bootstrapSamples resolved first; see render_local.cpp).
 struct MarkovChainBootstrap {
-  RenderSettings settings;  // the settings it was computed with (width/height resolved)
+  RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples resolved)
   BootstrapResult result;
 };
 
-// settings.width/height must be resolved against the scene camera (planJob does this).
-// Bootstrap sizing (common/mlt/bootstrap.h): RenderSettings::bootstrapSamples candidates per path length
-// to start with; while b's relative standard error is above 1%, the length contributing most to it
-// doubles its candidates, up to 8x.
-constexpr double kBootstrapTargetRelStdErr = 0.01;
-constexpr uint64_t kBootstrapMaxGrowth = 8;
+// Bootstrap sizing. b is refined by every large step of every chain (mlt/develop.h (D3)), so the
+// bootstrap only has to find start states and allocate chains to path lengths: it gets
+// kBootstrapShare of the mutations (a candidate costs about what a mutation costs), spread evenly over
+// the path lengths and rounded down to a power of two, at least kMinBootstrapPerLength per length (a
+// length whose candidates all miss gets no chains) and at most kMaxBootstrapPerLength.
+constexpr double kBootstrapShare = 0.02;
+constexpr uint64_t kMinBootstrapPerLength = 4096;
+constexpr uint64_t kMaxBootstrapPerLength = uint64_t(1) << 17;
+// Candidates per path length: settings.bootstrapSamples if set, else the automatic size above.
+uint64_t bootstrapPerLength(const RenderSettings& settings);
+// As above, for a job expected to run `candidatesAffordable` bootstrap candidates in its bootstrap share
+// (a time budget: measured throughput x budget x kBootstrapShare).
+uint64_t bootstrapPerLengthFor(const RenderSettings& settings, double candidatesAffordable);
+// The path lengths a job's chains cover ({-1} for pssmlt methods; kMin..maxDepth for mmlt).
+std::vector<int> chainPathLengths(const RenderSettings& settings);
+
+// b per path length slot, pooled from the bootstrap and the large steps merged so far (develop.h (D3),
+// (D4)); total = sum over slots, its standard error from the slots' in quadrature.
+struct RefinedB {
+  std::vector<BEstimate> perSlot;  // index = slot (pssmlt: 0; mmlt: k)
+  BEstimate total;
+};
+RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
 
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.

@@ -46,6 +46,7 @@ void ChainStats::add(const ChainStats& o) {
   largeAccepted += o.largeAccepted;
   smallProposed += o.smallProposed;
   smallAccepted += o.smallAccepted;
+  addPerSlot(largeStepSums, o.largeStepSums);
 }
 
 void PartialResult::add(const PartialResult& o) {

@@ -13,6 +13,7 @@
 
 #include "common/film/film.h"
 #include "common/integrators/path_evaluator.h"
+#include "common/mlt/target_sums.h"
 
 namespace mlt {
 
@@ -37,7 +38,10 @@ struct RenderSettings {
   // Markov chain methods.
   double mutationsPerPixel = 16;
   int chains = 0;                                 // 0 = choose automatically
-  int bootstrapSamples = 100000;                  // per path length for mmlt
+  // Bootstrap candidates per path length; 0 = automatic (a few percent of the mutations, see mlt_job.h).
+  // The bootstrap only finds start states and allocates chains to lengths: b is refined by the chains'
+  // large steps (mlt/develop.h (D3)).
+  int bootstrapSamples = 0;
   float largeStepProb = 0.3f;
   MutationKernel kernel = MutationKernel::Kelemen;
   float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
@@ -60,8 +64,11 @@ struct WorkUnit {
 
 // Normalization inputs decided by the plan, needed both by chains and by development.
 struct Normalization {
+  // The bootstrap's estimates: they allocate chains to lengths and weight Kelemen MIS splats. The image
+  // is developed with b pooled from these sums and the chains' large steps (mlt/develop.h (D3)).
   double b = 0, bStdErr = 0;                 // mean target value c over the bootstrap (all lengths)
   std::vector<double> bk, bkStdErr;          // mmlt: per path length k (index = k)
+  std::vector<TargetSums> bootstrapSums;     // per path length slot (pssmlt: 0; mmlt: k)
   std::vector<uint64_t> mutationsPerLength;  // mmlt: total planned mutations per length
   uint64_t totalMutations = 0;
   uint64_t bootstrapSamples = 0;
@@ -77,6 +84,7 @@ struct JobPlan {
 struct ChainStats {              // sums, so they merge by addition
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;  // index = path length (pssmlt: index 0)
   uint64_t largeProposed = 0, largeAccepted = 0, smallProposed = 0, smallAccepted = 0;
+  std::vector<TargetSums> largeStepSums;     // c of every large step, per path length slot (quantized per unit)
   void add(const ChainStats& o);
 };
 

@@ -32,6 +32,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);
     const int type = static_cast<int>(p.type);
     ++counts.proposed[type];
+    if (p.type == MutationType::Large) counts.largeSteps.add(cy);
 
     double wy, wx;
     if (mis) {

@@ -28,6 +28,7 @@
 #include "common/core/rng.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/kelemen_source.h"
+#include "common/mlt/target_sums.h"
 
 namespace mlt {
 
@@ -73,6 +74,9 @@ struct ChainConfig {
 
 struct ChainCounts {
   uint64_t proposed[2] = {0, 0}, accepted[2] = {0, 0};  // index = MutationType
+  // c(y) of every large-step proposal, accepted or not: independent uniform samples of the target, which
+  // refine b as the job runs (develop.h (D3)).
+  TargetSums largeSteps;
 };
 
 // Runs `mutations` steps from the current state x (already evaluated into `current`, target value cx > 0,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/job/mlt_job.h"
 #include "common/mlt/method_target.h"
 
 namespace mlt {
@@ -37,9 +38,15 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   ChainReport r;
   r.method = methodName(s.method);
   r.settings = s;
-  r.b = norm.b;
-  r.bStdErr = norm.bStdErr;
+  // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)).
+  const RefinedB refined = refinedB(norm, merged.stats);
+  r.b = refined.total.b;
+  r.bStdErr = refined.total.stdErr;
+  r.bBootstrap = norm.b;
+  r.bBootstrapStdErr = norm.bStdErr;
   r.bootstrapSamples = norm.bootstrapSamples;
+  for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;
+  r.bSamples += norm.bootstrapSamples;
   r.mutations = merged.samples;
   r.mutationsPerPixel = s.mutationsPerPixel;
   r.hasAcceptance = true;
@@ -64,8 +71,8 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
     for (int k = mmltMinLength(s.separateDirect); k < int(norm.bk.size()); ++k) {
       ChainLengthReport l;
       l.k = k;
-      l.bk = norm.bk[size_t(k)];
-      l.bkStdErr = k < int(norm.bkStdErr.size()) ? norm.bkStdErr[size_t(k)] : 0.0;
+      l.bk = size_t(k) < refined.perSlot.size() ? refined.perSlot[size_t(k)].b : 0.0;
+      l.bkStdErr = size_t(k) < refined.perSlot.size() ? refined.perSlot[size_t(k)].stdErr : 0.0;
       l.chains = size_t(k) < chainsPerSlot.size() ? chainsPerSlot[size_t(k)] : 0;
       l.mutations = size_t(k) < proposed.size() ? proposed[size_t(k)] : 0;
       l.acceptance = ratio(size_t(k) < accepted.size() ? accepted[size_t(k)] : 0, l.mutations);
@@ -79,6 +86,10 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["b"] = r.b;
   m.numbers["bStdErr"] = r.bStdErr;
   m.numbers["bootstrapSamples"] = double(r.bootstrapSamples);
+  m.numbers["bBootstrap"] = r.bBootstrap;
+  m.numbers["bBootstrapStdErr"] = r.bBootstrapStdErr;
+  m.numbers["bSamples"] = double(r.bSamples);
+  m.numbers["bootstrapPerLength"] = double(r.settings.bootstrapSamples);
   m.numbers["chains"] = double(r.chains);
   m.numbers["mutations"] = double(r.mutations);
   m.numbers["mutationsPerPixel"] = r.mutationsPerPixel;
@@ -114,6 +125,10 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.b = number(m, "b");
   r.bStdErr = number(m, "bStdErr");
   r.bootstrapSamples = uint64_t(number(m, "bootstrapSamples"));
+  r.bBootstrap = number(m, "bBootstrap");
+  r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
+  r.bSamples = uint64_t(number(m, "bSamples"));
+  r.settings.bootstrapSamples = int(number(m, "bootstrapPerLength"));
   r.chains = uint64_t(number(m, "chains"));
   r.mutations = uint64_t(number(m, "mutations"));
   r.mutationsPerPixel = number(m, "mutationsPerPixel");
@@ -153,9 +168,10 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
 
 std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, double chainSeconds,
                                const std::string& secondsNote) {
-  std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.2f}%, {} bootstrap samples", r.b, r.bStdErr,
-                                100 * r.relativeStdErr(), r.bootstrapSamples);
-  out += bootstrapSeconds >= 0 ? fmt::format(", {:.2f} s)\n", bootstrapSeconds) : ")\n";
+  std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.3f}%, from {} samples: {} bootstrap candidates", r.b,
+                                r.bStdErr, 100 * r.relativeStdErr(), r.bSamples, r.bootstrapSamples);
+  out += bootstrapSeconds >= 0 ? fmt::format(" in {:.2f} s", bootstrapSeconds) : "";
+  out += " + the chains' large steps)\n";
   if (!r.lengths.empty()) {
     out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}\n", "k", "b_k ± SE", "chains", "mutations", "acceptance");
     for (const ChainLengthReport& l : r.lengths)
@@ -175,9 +191,9 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
 std::string chainWarnings(const ChainReport& r) {
   if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
   return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
-                     "as uncertain: increase --bootstrap (now {} samples{})\n",
-                     100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, r.bootstrapSamples,
-                     r.lengths.empty() ? "" : " over all path lengths");
+                     "as uncertain: render more mutations (b is refined by every large step: now {} samples) or raise "
+                     "--large-step-prob\n",
+                     100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, r.bSamples);
 }
 
 }  // namespace mlt

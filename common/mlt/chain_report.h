@@ -1,11 +1,12 @@
 // What a Markov chain render reports (issue 3, "prints b with its standard error, the acceptance rate and
-// mutations per second"): b +- SE from the bootstrap, per path length k (mmlt) b_k +- SE, chains, mutations
+// mutations per second"): b +- SE as developed (bootstrap and the chains' large steps pooled), per path length k (mmlt) b_k +- SE, chains, mutations
 // M_k and acceptance, and the acceptance of large and small steps. The report is written into the image
 // metadata (addChainMetadata) and read back from it (chainReportFromMetadata), so `mltfarm render` prints
 // the same summary whether the image was rendered in this process or fetched from the farm.
 //
 // Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
-//   b, bStdErr, bootstrapSamples, chains, mutations, mutationsPerPixel (the setting: rendering again with
+//   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with), bBootstrap,
+//   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, acceptanceLarge, acceptanceSmall,
 //   largeSteps, smallSteps, largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
 //   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
@@ -33,8 +34,10 @@ struct ChainLengthReport {
 
 struct ChainReport {
   std::string method;
-  double b = 0, bStdErr = 0;
-  uint64_t bootstrapSamples = 0;
+  double b = 0, bStdErr = 0;                  // as developed: bootstrap + large steps (develop.h (D3))
+  double bBootstrap = 0, bBootstrapStdErr = 0;  // the bootstrap's alone (it allocated the chains)
+  uint64_t bootstrapSamples = 0;              // bootstrap candidates (all lengths)
+  uint64_t bSamples = 0;                      // samples b was pooled from (candidates + large steps)
   uint64_t chains = 0, mutations = 0;
   double mutationsPerPixel = 0;
   bool hasAcceptance = false;  // false: an image whose metadata does not carry the acceptance keys

@@ -1,5 +1,6 @@
 #include "common/mlt/develop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,17 +11,6 @@ namespace mlt {
 
 double chainSplatScale(double b, uint64_t totalMutations, size_t pixels) {
   return totalMutations > 0 ? b * double(pixels) / double(totalMutations) : 0.0;
-}
-
-double lengthWeightCorrection(double bk, uint64_t Mk, double b, uint64_t M) {
-  if (Mk == 0 || !(b > 0)) return 0.0;
-  return (bk / double(Mk)) / (b / double(M));
-}
-
-double directSplatPrescale(double b, uint64_t totalMutations, uint64_t directLightPaths) {
-  if (directLightPaths == 0) return 0.0;
-  if (!(b > 0) || totalMutations == 0) return 1.0;  // no chains: the scale (D1) is unused then
-  return double(totalMutations) / (b * double(directLightPaths));
 }
 
 namespace {
@@ -35,6 +25,12 @@ double quantize(double v, uint64_t key) {
   return std::ldexp(u < scaled - lo ? lo + 1 : lo, -kQuantumExp);
 }
 }  // namespace
+
+void quantizeSums(TargetSums& sums, uint64_t jobSeed, uint64_t unitIndex, uint64_t slot) {
+  const uint64_t k = hashKeys(hashKeys(jobSeed, unitIndex, 0x6273756dULL), slot, 0);
+  sums.sum = quantize(sums.sum, k + 1);
+  sums.sumSq = quantize(sums.sumSq, k + 2);
+}
 
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
   const uint64_t base = hashKeys(jobSeed, unitIndex, 0x71756e74ULL);
@@ -51,6 +47,8 @@ void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
   };
   quantizeBuffer(film.splatSums(), 0);
   quantizeBuffer(film.pixelSums(), 1);
+  for (size_t l = 1; l < film.splatLayerCount(); ++l)
+    if (film.hasSplatLayer(l)) quantizeBuffer(film.splatLayer(l), l + 1);
 }
 
 }  // namespace mlt

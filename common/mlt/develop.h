@@ -15,46 +15,60 @@
 // with splatSum_j summed over all chains and M the total number of mutations (P / M = 1 / mpp).
 //
 // ---- Several path lengths (mmlt) ----------------------------------------------------------------
-// Length k has its own target c_k, normalization b_k and M_k mutations; its image is (D1) with (b_k,
-// M_k) and the image is the sum over k. With one splat buffer, every length must share one scale. We
-// choose the global scale b * P / M (b = sum b_k, M = sum M_k) and let each chain of length k multiply
-// its splat weights by
-//     r_k = (b_k / M_k) / (b / M)                                               (D2)
-// so that b * P / M * r_k * splatSum_k = b_k * P / M_k * splatSum_k exactly, whatever the allocation.
-// Allocation apportions M_k proportionally to b_k (largest remainder), so r_k = 1 up to rounding of
-// one mutation; (D2) removes even that. (D2) holds only for the planned M_k, so every planned chain must
-// run: the farm waits for every chain, and a time budget chooses M before planning (from a throughput
-// trial, tools/cli/render_local.cpp) instead of dropping chains. A preview of some chains develops with
-// the mutations merged (approximate for mmlt).
+// Length k has its own target c_k, normalization b_k and M_k mutations; its image is (D1) with (b_k, M_k)
+// and the image is the sum over k:
+//     I_j = sum_k b_k * P / M_k * splatSum_kj.                                 (D2)
+// Every length splats into its own film layer (film.h: layer 1 + k; pssmlt's single length is slot 0,
+// layer 1), so the chains never see b_k: the factor is applied once, here, when the image is developed.
+// M_k is the number of mutations of length k merged, so a preview of some chains is (D2) over what it
+// holds (each chain is stationary; a subset of chains estimates its lengths' images) and exact.
+//
+// ---- b refined as the job runs (pooled estimator) ---------------------------------------------------
+// b_k = integral over U of c_k(u) du. Two sets of independent samples of c_k(u) with u uniform on U
+// exist: the N_0 bootstrap candidates (IndependentSource) and every large step of every chain of length k
+// (a large step draws all of its coordinates afresh, independently of the chain's state, whether it is
+// accepted or not). Both are i.i.d. with mean b_k, so the pooled mean over all N = N_0 + N_L of them,
+//     b_k^ = (S_0 + S_L) / (N_0 + N_L),     S = sum of c,  Q = sum of c^2,         (D3)
+// is unbiased, with the sample variance  s^2 = (Q_0 + Q_L - N b_k^2) / (N - 1)  and the standard error
+//     SE(b_k^) = sqrt(s^2 / N).                                                 (D4)
+// The bootstrap is kept small (it only has to find start states); the large steps, about p_large * M_k
+// of them, bring SE(b_k^) down as the job grows, so the brightness error shrinks with the job instead
+// of staying at the bootstrap's. b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
+// (Using b_k^ from the same run as the splats makes I_j a ratio estimator, biased by O(1/N): negligible
+// beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting still weights
+// with the bootstrap's b_k, which the chain must know; its large-step weights are therefore only as good
+// as the bootstrap (ChainSplatting::KelemenMIS is not the default).
 //
 // ---- Direct illumination rendered separately (separateDirect) -------------------------------------
 // Paths of at most kDirectMaxSegments segments are rendered by bdpt (pixel samples + t = 1 splats) and
 // the chains carry only longer paths. bdpt's pixel estimates use the film's pixel buffer (sum / count);
-// its t = 1 splats would develop with P / N (N = light paths, see sample_job.cpp); they are pre-scaled by
-//     (P / N) / (b P / M) = M / (b N)                                           (D3)
-// when the unit finishes, so that one splat scale (D1) develops chains and direct pass together.
+// its t = 1 splats go to layer 0 and develop with P / N (N = light paths merged, see sample_job.cpp).
 //
 // ---- Exact merging ----------------------------------------------------------------------------------
 // Each unit's sums are rounded to multiples of 2^-kQuantumExp (stochastic rounding with a hash of (job
 // seed, unit, element): unbiased and deterministic). Sums of such values are exact in double while below
 // 2^(53 - kQuantumExp), so partial results develop to identical bytes however units are grouped.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "common/film/film.h"
+#include "common/mlt/target_sums.h"
 
 namespace mlt {
 
 constexpr int kDirectMaxSegments = 2;  // separateDirect: emission seen directly (1) and one bounce (2)
 constexpr int kQuantumExp = 26;
 
-// (D1): the splat scale of the merged film.
+// (D1): the splat scale of one length's film layer.
 double chainSplatScale(double b, uint64_t totalMutations, size_t pixels);
-// (D2): the weight factor of a chain of length k.
-double lengthWeightCorrection(double bk, uint64_t Mk, double b, uint64_t M);
-// (D3): the pre-scale of the direct pass's t = 1 splats.
-double directSplatPrescale(double b, uint64_t totalMutations, uint64_t directLightPaths);
+// The film layer of path length slot `slot` (pssmlt: 0; mmlt: k).
+inline size_t chainLayer(size_t slot) { return slot + 1; }
+
+// Rounds the sums of one work unit to multiples of 2^-kQuantumExp, as quantizeFilm does for films, so that
+// they merge exactly in any grouping.
+void quantizeSums(TargetSums& sums, uint64_t jobSeed, uint64_t unitIndex, uint64_t slot);
 // Rounds every sum of `film` to a multiple of 2^-kQuantumExp (see above). Values of 2^(52 - kQuantumExp)
 // or more are multiples already and are kept as they are; where merged sums exceed 2^(53 - kQuantumExp)
 // the last bits may depend on the grouping (the image is still right, and deterministic per grouping).

@@ -31,18 +31,19 @@ class EvaluatorTarget final : public ChainTarget {
   SampleSource& source_;
 };
 
-// Splats into a film's splat buffer; `scale` multiplies every weight (mmlt's r_k, develop.h (D2)).
+// Splats into one splat layer of a film (a Markov chain job: layer 1 + path length slot, develop.h (D2)),
+// unscaled: normalization happens only when the film is developed.
 class FilmSink final : public ChainSink {
  public:
-  explicit FilmSink(Film& film, double scale = 1.0) : film_(film), scale_(scale) {}
+  explicit FilmSink(Film& film, size_t layer = 0) : film_(film), layer_(layer) {}
   void splat(const PathContribution& path, double weight) override {
-    const float w = static_cast<float>(weight * scale_);
-    for (const Splat& s : path.splats) film_.addSplat(s.pRaster, s.L * w);
+    const float w = static_cast<float>(weight);
+    for (const Splat& s : path.splats) film_.addSplat(s.pRaster, s.L * w, layer_);
   }
 
  private:
   Film& film_;
-  double scale_;
+  size_t layer_;
 };
 
 }  // namespace mlt

@@ -28,7 +28,7 @@ struct EvalCliOptions {
   std::vector<double> budgets{1, 2, 4, 8};
   std::string out, reference, refMethod = "bdpt", injectOutlier, python = "/usr/bin/python3";
   int runs = 3, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0, refSpp = 1024, refParts = 4;
-  int chains = 0, bootstrap = 100000;
+  int chains = 0, bootstrap = 0;
   float largeStep = 0.3f;
   double eps = 1e-2, outlierRatio = 4, biasAlpha = 1e-3, minBias = 0.01;
   uint64_t seed = 1;
@@ -174,7 +174,7 @@ CommandRun setupEval(CLI::App& sub) {
   auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's, else 5)")
                       ->check(CLI::NonNegativeNumber);
   sub.add_option("--chains", o->chains, "Markov chains per job (0 = automatic)")->check(CLI::NonNegativeNumber);
-  sub.add_option("--bootstrap", o->bootstrap, "Bootstrap samples (per path length for mmlt)")
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 2% of the mutations or of the time budget; b is refined by the chains' large steps)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub.add_option("--large-step", o->largeStep, "Large-step probability")->capture_default_str()->check(CLI::Range(0.0, 1.0));

@@ -19,7 +19,7 @@ struct RenderCliOptions {
   std::string scene, out, method = "bdpt", png;
   int spp = 16, samplesPerUnit = 0, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0;
   double mutationsPerPixel = 16, time = 0;
-  int chains = 0, bootstrap = 100000;
+  int chains = 0, bootstrap = 0;
   float largeStep = 0.3f, exposure = 0;
   std::string kernel = "kelemen", splatting = "expected-value";
   float s1 = 1.0f / 1024, s2 = 1.0f / 64, sigma = 0.01f;
@@ -73,7 +73,7 @@ CommandRun setupRender(CLI::App& sub) {
       ->check(CLI::PositiveNumber);
   sub.add_option("--chains", o->chains, "Markov chain methods: number of chains (0 = automatic)")
       ->check(CLI::NonNegativeNumber);
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap samples to start with (per path length for mmlt); while b's relative standard error is above 1%, the noisiest length doubles its samples, up to 8x")
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 2% of the mutations or of the time budget; b is refined by the chains' large steps)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")

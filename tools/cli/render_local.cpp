@@ -78,7 +78,8 @@ double roundDownSignificant(double x, int digits) {
 
 // A time budget for a Markov chain method. The image must stay a pure function of (settings, seed,
 // mutations per pixel), so no chain is cut short or dropped; instead:
-//   1. bootstrap once (a pure function of the seed and settings, independent of the mutation count);
+//   1. bootstrap once, sized to its share of the budget (a pure function of the seed and settings with the
+//      bootstrap size resolved, independent of the mutation count);
 //   2. measure mutation throughput on every thread with prefixes of the planned chains, for about
 //      kTrialShare of the budget (their results are discarded: the trial never touches the image);
 //   3. choose mutations per pixel to fill what remains of the budget (rounded down to 3 digits; less the
@@ -90,7 +91,24 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   s.width = scene.camera().width();  // resolved as planJob does
   s.height = scene.camera().height();
   const double budget = s.timeBudgetSeconds;
-  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(scene, s);
+  // 1. The bootstrap gets kBootstrapShare of the budget (mlt_job.h): a probe of the smallest automatic size
+  //    measures the candidates' throughput, and the count that fits is resolved into the settings (and
+  //    recorded in the image, so that --bootstrap with it reproduces the image without a budget).
+  MarkovChainBootstrap boot;
+  if (s.bootstrapSamples == 0) {
+    RenderSettings probe = s;
+    probe.bootstrapSamples = int(kMinBootstrapPerLength);
+    boot = bootstrapMarkovChainJob(scene, probe);
+    const double perSecond = double(boot.result.candidates) / std::max(boot.result.seconds, 1e-6);
+    s.bootstrapSamples = int(bootstrapPerLengthFor(s, kBootstrapShare * budget * perSecond));
+    if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
+      const double probeSeconds = boot.result.seconds;
+      boot = bootstrapMarkovChainJob(scene, s);
+      boot.result.seconds += probeSeconds;
+    }
+  } else {
+    boot = bootstrapMarkovChainJob(scene, s);
+  }
   JobPlan trialPlan = planMarkovChainJob(scene, s, boot);
   std::vector<WorkUnit> trialUnits, directUnits;
   for (const WorkUnit& u : trialPlan.units) {
@@ -284,15 +302,18 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   if (progress && chains) {
     const std::string trialNote =
         result.chainBudget ? fmt::format(", throughput trial {:.2f} s", result.chainBudget->trialSeconds) : "";
-    progress->finish(fmt::format("{}: {}/{} work units in {:.2f} s (bootstrap {:.2f} s{}){}",
+    progress->finish(fmt::format("{}: {}/{} work units in {:.2f} s (bootstrap {:.2f} s = {:.1f}% of the job{}){}",
                                  methodName(plan.settings.method), merged, nUnits, result.seconds,
-                                 plan.norm.bootstrapSeconds, trialNote, nonFiniteNote));
+                                 plan.norm.bootstrapSeconds,
+                                 100 * plan.norm.bootstrapSeconds / std::max(result.seconds, 1e-9), trialNote,
+                                 nonFiniteNote));
     std::string summary = formatChainSummary(*report, plan.norm.bootstrapSeconds, result.runSeconds);
     if (result.chainBudget)
       summary += fmt::format("time budget {} s: the trial measured {:.4g} mutations/s; chose {} mutations per pixel "
-                             "(the same settings with --mutations-per-pixel {} instead of --time give the same image)\n",
+                             "(the same settings with --mutations-per-pixel {} --bootstrap {} instead of --time give the same image)\n",
                              plan.settings.timeBudgetSeconds, result.chainBudget->mutationsPerSecond,
-                             result.chainBudget->mutationsPerPixel, result.chainBudget->mutationsPerPixel);
+                             result.chainBudget->mutationsPerPixel, result.chainBudget->mutationsPerPixel,
+                             plan.settings.bootstrapSamples);
     std::fputs(summary.c_str(), stderr);
   } else if (progress) {
     char line[512];
