@@ -193,7 +193,13 @@ v1::JobPlan toProto(const JobPlan& plan) {
   n->set_total_mutations(plan.norm.totalMutations);
   n->set_bootstrap_samples(plan.norm.bootstrapSamples);
   n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
-  for (const TargetSums& t : plan.norm.bootstrapSums) *n->add_bootstrap_sums() = toProto(t);
+  for (const BootstrapEstimate& e : plan.norm.bootstrapB) {
+    auto* p = n->add_bootstrap_b();
+    p->set_n(e.n);
+    p->set_b(e.b);
+    p->set_std_err(e.stdErr);
+    p->set_sample_var(e.sampleVar);
+  }
   for (const WorkUnit& u : plan.units) {
     auto* w = p.add_units();
     w->set_index(u.index);
@@ -222,7 +228,11 @@ JobPlan fromProto(const v1::JobPlan& p) {
   plan.norm.totalMutations = n.total_mutations();
   plan.norm.bootstrapSamples = n.bootstrap_samples();
   plan.norm.bootstrapSeconds = n.bootstrap_seconds();
-  for (const auto& t : n.bootstrap_sums()) plan.norm.bootstrapSums.push_back(fromProto(t, "plan.norm.bootstrap_sums"));
+  for (const auto& e : n.bootstrap_b()) {
+    for (double v : {e.b(), e.std_err(), e.sample_var()})
+      if (!(std::isfinite(v) && v >= 0)) throw WireError("plan.norm.bootstrap_b", fmt::format("invalid value {}", v));
+    plan.norm.bootstrapB.push_back({e.n(), e.b(), e.std_err(), e.sample_var()});
+  }
   plan.units.reserve(p.units_size());
   for (int i = 0; i < p.units_size(); ++i) {
     const auto& w = p.units(i);

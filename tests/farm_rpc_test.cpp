@@ -79,12 +79,13 @@ TEST(FarmRpc, BadInputGetsTheRightStatusAndOtherJobsKeepRunning) {
   bad([](auto& s) { s.settings.width = -32; }, "settings.width", "negative width");
   bad([](auto& s) { s.settings.integrator.maxDepth = -7; }, "settings.max_depth", "negative depth");
   bad([](auto& s) { s.settings.largeStepProb = 1.5f; }, "settings.large_step_prob", "probability > 1");
-  // mmlt runs chains per path length: unlimited depth is refused at submission, not when planning.
+  // mmlt runs chains per path length: a max depth of 0 (no path at all) is refused at submission, not when
+  // planning.
   bad([](auto& s) {
     s.settings.method = Method::MMLT;
-    s.settings.integrator.maxDepth = -1;
+    s.settings.integrator.maxDepth = 0;
     s.hasMaxDepth = true;
-  }, "finite max depth", "mmlt with unlimited depth");
+  }, "max depth >= 1 or -1", "mmlt with max depth 0");
   // Unknown job ids.
   expectRpcError([&] { c.get("job-999"); }, grpc::NOT_FOUND, "job-999", "unknown job");
   expectRpcError([&] { c.get("nonsense"); }, grpc::NOT_FOUND, "nonsense", "malformed job id");

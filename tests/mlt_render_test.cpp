@@ -113,5 +113,27 @@ TEST(MltRender, FurnaceSphereMatchesAnalyticRadiance) {
   }
 }
 
+TEST(MltRender, MmltWithUnlimitedDepthMatchesTheInfiniteSeries) {
+  // Le / (1 - rho): every path length carries light. The bootstrap adds blocks of lengths until one
+  // carries less than kNegligibleLengthShare of b; here 0.5^k, so lengths 1..24 (the rest: ~6e-8 of b).
+  const float Le = 1.0f, rho = 0.5f;
+  const auto scene = RenderScene::build(test::furnaceSphere(Le, rho, 8, 8, 8));
+  RenderSettings s;
+  s.method = Method::MMLT;
+  s.integrator.maxDepth = -1;
+  s.mutationsPerPixel = 512;
+  s.bootstrapSamples = 5000;
+  s.chains = 24;
+  const JobPlan plan = planJob(*scene, s);
+  EXPECT_EQ(plan.norm.mutationsPerLength.size(), size_t(25)) << "lengths 1..24";
+  EXPECT_GT(plan.norm.bk[16], 0.0) << "length 16 carries light";
+  const double expected = luminance(Color(float(test::furnaceRadiance(Le, rho, -1))));
+  const test::ImageStats st = test::markovChainStats(*scene, s, 8, 8, kRuns, /*tiles=*/1);
+  EXPECT_LT(std::fabs(st.mean[0] - expected), kZ * st.stdErr[0] + 1e-4 * expected)
+      << st.mean[0] << " +- " << st.stdErr[0] << " vs analytic " << expected;
+  // The test can fail: truncating at the scene's depth 8 would be 0.4% dark, more than its resolution.
+  EXPECT_LT(kZ * st.stdErr[0], expected - test::furnaceRadiance(Le, rho, 8));
+}
+
 }  // namespace
 }  // namespace mlt

@@ -25,7 +25,7 @@ void readBlock(KelemenSource& s, Stream stream, int n) {
 
 TEST(KelemenSource, StartStateReplaysTheCandidate) {
   KelemenSource s(KelemenParams{}, kSeed, 3, 12345);
-  const IndependentSource candidate(kSeed, 12345);
+  const IndependentSource candidate = IndependentSource::candidate(kSeed, 12345);  // the bootstrap's source
   for (int stream = 0; stream < kNumStreams; ++stream) {
     s.startStream(Stream(stream));
     for (int j = 0; j < 40; ++j) EXPECT_EQ(s.next1D(), candidate.valueAt(stream, j)) << stream << " " << j;

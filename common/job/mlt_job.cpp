@@ -48,12 +48,14 @@ bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > 
 
 std::vector<int> chainPathLengths(const RenderSettings& s) {
   if (s.method != Method::MMLT) return {-1};
-  if (s.integrator.maxDepth < 1)
-    throw std::invalid_argument("settings: mmlt needs a finite max depth >= 1 (got " +
-                                std::to_string(s.integrator.maxDepth) +
-                                "; it runs chains per path length: pass --max-depth N, or use pssmlt)");
+  if (s.integrator.maxDepth == 0 || s.integrator.maxDepth < -1)
+    throw std::invalid_argument("settings: mmlt needs a max depth >= 1 or -1 (unlimited), got " +
+                                std::to_string(s.integrator.maxDepth));
+  // Unlimited: the first block; the bootstrap adds blocks while they carry light (bootstrapMarkovChainJob).
+  const int kMin = mmltMinLength(s.separateDirect);
+  const int kMax = s.integrator.maxDepth < 0 ? kMin + kUnlimitedLengthBlock - 1 : s.integrator.maxDepth;
   std::vector<int> lengths;
-  for (int k = mmltMinLength(s.separateDirect); k <= s.integrator.maxDepth; ++k) lengths.push_back(k);
+  for (int k = kMin; k <= kMax; ++k) lengths.push_back(k);
   return lengths;
 }
 
@@ -73,13 +75,13 @@ uint64_t bootstrapPerLength(const RenderSettings& s) {
 
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
   RefinedB r;
-  const size_t slots = std::max(norm.bootstrapSums.size(), merged.largeStepSums.size());
+  const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
   r.perSlot.resize(slots);
   double var = 0;
   for (size_t l = 0; l < slots; ++l) {
-    const TargetSums boot = l < norm.bootstrapSums.size() ? norm.bootstrapSums[l] : TargetSums{};
+    const BootstrapEstimate boot = l < norm.bootstrapB.size() ? norm.bootstrapB[l] : BootstrapEstimate{};
     const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
-    r.perSlot[l] = pooledB(boot, large);
+    r.perSlot[l] = combineB(boot, large);
     r.total.b += r.perSlot[l].b;
     r.total.samples += r.perSlot[l].samples;
     var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
@@ -144,7 +146,7 @@ void validateMarkovChainSettings(const RenderSettings& s) {
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
   if (s.separateDirect && s.method == Method::PSSMLT)
     throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
-  chainLengths(s);  // mmlt: a finite max depth
+  chainLengths(s);  // mmlt: a valid max depth
 }
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
@@ -160,15 +162,44 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
   const uint64_t seed = s.seed;
-  out.result = runBootstrap(bc, [&scene, &s, seed]() -> CandidateFn {
+  const CandidateFnFactory candidates = [&scene, &s, seed]() -> CandidateFn {
     auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);
     auto path = std::make_shared<PathContribution>();
     return [target, path, seed](uint64_t index, int k) {
-      IndependentSource source(seed, index);
+      IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
       return targetFunction(*path);
     };
-  });
+  };
+  out.result = runBootstrap(bc, candidates);
+  if (s.method != Method::MMLT || s.integrator.maxDepth >= 0) return out;
+
+  // Unlimited depth: one more block of lengths while the last one carried more than
+  // kNegligibleLengthShare of b (see mlt_job.h). Each block's candidates have slots of their own.
+  BootstrapResult& all = out.result;
+  double var = all.bStdErr * all.bStdErr;
+  for (double blockB = all.b; blockB > kNegligibleLengthShare * all.b;) {
+    const int next = all.lengths.back().pathLength + 1;
+    if (next > kMaxUnlimitedLength) {
+      spdlog::warn("mmlt, unlimited depth: paths longer than {} segments still carry {:.3g} of b; they are dropped",
+                   kMaxUnlimitedLength, blockB / all.b);
+      break;
+    }
+    bc.firstSlot = all.lengths.size();
+    bc.pathLengths.clear();
+    for (int k = next; k < next + kUnlimitedLengthBlock && k <= kMaxUnlimitedLength; ++k) bc.pathLengths.push_back(k);
+    BootstrapResult block = runBootstrap(bc, candidates);
+    for (LengthBootstrap& lb : block.lengths) all.lengths.push_back(std::move(lb));
+    all.b += block.b;
+    var += block.bStdErr * block.bStdErr;
+    all.candidates += block.candidates;
+    all.seconds += block.seconds;
+    blockB = block.b;
+  }
+  all.bStdErr = std::sqrt(var);
+  spdlog::info("mmlt, unlimited depth: path lengths {}..{} (the next {} carried less than {:.0e} of b)",
+               all.lengths.front().pathLength, all.lengths.back().pathLength, kUnlimitedLengthBlock,
+               kNegligibleLengthShare);
   return out;
 }
 
@@ -190,7 +221,6 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   plan.settings.bootstrapSamples = bootstrap.settings.bootstrapSamples;  // resolved
   const uint64_t P = uint64_t(s.width) * uint64_t(s.height);
   const uint64_t M = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(s.mutationsPerPixel * double(P))));
-  const std::vector<int> lengths = chainLengths(s);
   const BootstrapResult& boot = bootstrap.result;
   Normalization& norm = plan.norm;
   norm.b = boot.b;
@@ -206,14 +236,14 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
   std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, bk) : std::vector<uint64_t>(bk.size(), 0);
   if (s.method == Method::MMLT) {
-    const int kMax = lengths.empty() ? 0 : lengths.back();
+    const int kMax = boot.lengths.empty() ? 0 : boot.lengths.back().pathLength;  // unlimited depth: as bootstrapped
     norm.bk.assign(kMax + 1, 0);
     norm.bkStdErr.assign(kMax + 1, 0);
     norm.mutationsPerLength.assign(kMax + 1, 0);
   } else {
     norm.mutationsPerLength.assign(1, 0);
   }
-  norm.bootstrapSums.assign(norm.mutationsPerLength.size(), TargetSums{});
+  norm.bootstrapB.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
   uint32_t index = 0;
   for (size_t l = 0; l < boot.lengths.size(); ++l) {
     const LengthBootstrap& lb = boot.lengths[l];
@@ -223,7 +253,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
       norm.bkStdErr[slot] = lb.bStdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
-    for (double c : lb.c) norm.bootstrapSums[slot].add(c);  // in index order: deterministic
+    norm.bootstrapB[slot] = {lb.c.size(), lb.b, lb.bStdErr, lb.sampleVar};
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {

@@ -21,20 +21,30 @@ struct MarkovChainBootstrap {
   BootstrapResult result;
 };
 
-// Bootstrap sizing. b is refined by every large step of every chain (mlt/develop.h (D3)), so the
-// bootstrap only has to find start states and allocate chains to path lengths: it gets
-// kBootstrapShare of the mutations (a candidate costs about what a mutation costs), spread evenly over
-// the path lengths and rounded down to a power of two, at least kMinBootstrapPerLength per length (a
-// length whose candidates all miss gets no chains) and at most kMaxBootstrapPerLength.
-constexpr double kBootstrapShare = 0.02;
+// Bootstrap sizing. The bootstrap finds start states, allocates chains to path lengths and gives the
+// first estimate of b, which every large step of every chain then refines (mlt/develop.h (D3)-(D5)).
+// Its candidates spread their film positions evenly (sample_source.h), which makes one candidate worth
+// ~30 large steps for b on a scene with a visible light: so it gets kBootstrapShare of the mutations (a
+// candidate costs about what a mutation costs), spread evenly over the path lengths and rounded down to
+// a power of two, at least kMinBootstrapPerLength per length (a length whose candidates all miss gets no
+// chains) and at most kMaxBootstrapPerLength. Measured cost: 1.6-2.5% of the job (README).
+constexpr double kBootstrapShare = 0.04;
 constexpr uint64_t kMinBootstrapPerLength = 4096;
-constexpr uint64_t kMaxBootstrapPerLength = uint64_t(1) << 17;
+constexpr uint64_t kMaxBootstrapPerLength = uint64_t(1) << 20;
 // Candidates per path length: settings.bootstrapSamples if set, else the automatic size above.
 uint64_t bootstrapPerLength(const RenderSettings& settings);
 // As above, for a job expected to run `candidatesAffordable` bootstrap candidates in its bootstrap share
 // (a time budget: measured throughput x budget x kBootstrapShare).
 uint64_t bootstrapPerLengthFor(const RenderSettings& settings, double candidatesAffordable);
-// The path lengths a job's chains cover ({-1} for pssmlt methods; kMin..maxDepth for mmlt).
+// mmlt with unlimited depth (max depth -1): lengths are bootstrapped in blocks of kUnlimitedLengthBlock
+// from kMin on, until a whole block carries at most kNegligibleLengthShare of b (as the bootstrap
+// measures it), or kMaxUnlimitedLength is reached. Longer paths are left out: a bias of about that share,
+// since b_k falls geometrically once paths bounce between surfaces of albedo < 1.
+constexpr int kUnlimitedLengthBlock = 8;
+constexpr double kNegligibleLengthShare = 1e-4;
+constexpr int kMaxUnlimitedLength = 1024;
+// The path lengths a job's chains cover ({-1} for pssmlt methods; kMin..maxDepth for mmlt; for mmlt with
+// unlimited depth the first block, to which the bootstrap adds).
 std::vector<int> chainPathLengths(const RenderSettings& settings);
 
 // b per path length slot, pooled from the bootstrap and the large steps merged so far (develop.h (D3),

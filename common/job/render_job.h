@@ -68,7 +68,7 @@ struct Normalization {
   // is developed with b pooled from these sums and the chains' large steps (mlt/develop.h (D3)).
   double b = 0, bStdErr = 0;                 // mean target value c over the bootstrap (all lengths)
   std::vector<double> bk, bkStdErr;          // mmlt: per path length k (index = k)
-  std::vector<TargetSums> bootstrapSums;     // per path length slot (pssmlt: 0; mmlt: k)
+  std::vector<BootstrapEstimate> bootstrapB; // per path length slot (pssmlt: 0; mmlt: k)
   std::vector<uint64_t> mutationsPerLength;  // mmlt: total planned mutations per length
   uint64_t totalMutations = 0;
   uint64_t bootstrapSamples = 0;

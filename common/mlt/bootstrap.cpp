@@ -49,13 +49,28 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
     lb.b = sum / double(N);
     double sq = 0;
     for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
-    varMean[l] = sq / (double(N) * double(N - 1));  // variance of the mean
+    lb.sampleVar = sq / double(N - 1);
+    // Variance of the mean. Candidates spread their film positions evenly (sample_source.h), so the i.i.d.
+    // formula overstates it; with whole randomization groups, their means are i.i.d. and give it exactly.
+    const uint64_t G = kCandidateGroups;
+    if (N % G == 0 && N >= 2 * G) {
+      std::vector<double> groupSum(G, 0.0);
+      for (uint64_t i = 0; i < N; ++i) groupSum[i % G] += lb.c[i];
+      double gsq = 0;
+      for (uint64_t g = 0; g < G; ++g) {
+        const double d = groupSum[g] / double(N / G) - lb.b;
+        gsq += d * d;
+      }
+      varMean[l] = gsq / (double(G) * double(G - 1));
+    } else {
+      varMean[l] = lb.sampleVar / double(N);
+    }
     lb.bStdErr = std::sqrt(varMean[l]);
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;
     lb.pathLength = config.pathLengths[l];
-    lb.firstCandidate = uint64_t(l) << kCandidateSlotBits;
+    lb.firstCandidate = (config.firstSlot + uint64_t(l)) << kCandidateSlotBits;
     evaluate(lb, 0, N0);
     result.lengths.push_back(std::move(lb));
     reduce(l);

@@ -3,7 +3,8 @@
 // mmlt) with its standard error, and an alias table from which chains draw their start states in
 // proportion to c.
 //
-// Candidate indexing: path length slot l (l = 0 for pssmlt; l = k - kMin for mmlt) owns candidates
+// Candidate indexing: path length slot l (l = 0 for pssmlt; l = k - kMin for mmlt; firstSlot + i for
+// the i-th length of a config) owns candidates
 // [l << kCandidateSlotBits, (l + 1) << kCandidateSlotBits); its first n candidates are evaluated.
 // Candidate i reads IndependentSource(jobSeed, i). A worker replays candidate i with exactly that source.
 //
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "common/mlt/alias_table.h"
+#include "common/sampler/sample_source.h"  // kCandidateSlotBits, kCandidateGroups
 
 namespace mlt {
 
@@ -31,13 +33,13 @@ using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
 // Makes a CandidateFn with its own scratch buffers (called once per parallel task).
 using CandidateFnFactory = std::function<CandidateFn()>;
 
-constexpr int kCandidateSlotBits = 40;
 
 struct BootstrapConfig {
   uint64_t candidatesPerLength = 100000;  // initial count per path length
   double targetRelStdErr = 0;             // 0: a fixed size
   uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength per length
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
+  uint64_t firstSlot = 0;                // slot of pathLengths[0] (a later block of lengths continues the slots)
   bool parallel = true;
 };
 
@@ -45,7 +47,8 @@ struct LengthBootstrap {
   int pathLength = -1;
   uint64_t firstCandidate = 0;
   std::vector<double> c;  // target value of each candidate
-  double b = 0, bStdErr = 0;
+  double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
+  double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
   AliasTable table;       // over c; empty if b == 0
 };
 

@@ -23,17 +23,26 @@
 // M_k is the number of mutations of length k merged, so a preview of some chains is (D2) over what it
 // holds (each chain is stationary; a subset of chains estimates its lengths' images) and exact.
 //
-// ---- b refined as the job runs (pooled estimator) ---------------------------------------------------
-// b_k = integral over U of c_k(u) du. Two sets of independent samples of c_k(u) with u uniform on U
-// exist: the N_0 bootstrap candidates (IndependentSource) and every large step of every chain of length k
-// (a large step draws all of its coordinates afresh, independently of the chain's state, whether it is
-// accepted or not). Both are i.i.d. with mean b_k, so the pooled mean over all N = N_0 + N_L of them,
-//     b_k^ = (S_0 + S_L) / (N_0 + N_L),     S = sum of c,  Q = sum of c^2,         (D3)
-// is unbiased, with the sample variance  s^2 = (Q_0 + Q_L - N b_k^2) / (N - 1)  and the standard error
-//     SE(b_k^) = sqrt(s^2 / N).                                                 (D4)
-// The bootstrap is kept small (it only has to find start states); the large steps, about p_large * M_k
-// of them, bring SE(b_k^) down as the job grows, so the brightness error shrinks with the job instead
-// of staying at the bootstrap's. b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
+// ---- b refined as the job runs ---------------------------------------------------------------------
+// b_k = integral over U of c_k(u) du. Two sets of samples of c_k estimate it:
+//  - the N_0 bootstrap candidates. Each is uniform on U on its own, but their film positions (Camera
+//    [0,1]) are a randomized Halton sequence in kCandidateGroups independent randomizations
+//    (sample_source.h), so the image's bright and dark regions are visited in proportion. Their mean b_0
+//    is unbiased; its variance v_0 is estimated from the spread of the groups' means (the i.i.d. formula
+//    would miss the gain: on the Cornell box with its light in view, 6x smaller standard error);
+//  - every large step of every chain of length k: it draws all of its coordinates afresh, independently
+//    of the chain's state, whether accepted or not, so its c(y) is an i.i.d. uniform sample. Their mean
+//    b_L = S_L / N_L (S = sum of c, merged by addition) has variance sigma^2 / N_L, where sigma^2, the
+//    variance of c for one uniform sample, is estimated by the bootstrap (its i.i.d. sample variance).
+// Combined by inverse variance,
+//     b_k^ = w b_0 + (1 - w) b_L,   w = v_L / (v_0 + v_L),   v_L = sigma^2 / N_L,             (D3)
+//     SE(b_k^) = sqrt(v_0 v_L / (v_0 + v_L)).                                                 (D4)
+// The weights come from the bootstrap only, never from the large steps' own spread (weights that depend
+// on the values they weight bias a heavy-tailed c low); w depends on the bootstrap's values, which
+// leaves a bias of order 1 / N_0, far below SE(b_k^) at the bootstrap's sizes. With no large steps
+// b_k^ = b_0; as the job grows v_L -> 0 and b_k^ -> the large steps' mean: the brightness error
+// shrinks with the job instead of staying at the bootstrap's.                               (D5)
+// b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
 // (Using b_k^ from the same run as the splats makes I_j a ratio estimator, biased by O(1/N): negligible
 // beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting still weights
 // with the bootstrap's b_k, which the chain must know; its large-step weights are therefore only as good

@@ -14,7 +14,7 @@
 //     applied at once: n exponential steps in sequence, or one Gaussian step of sigma * sqrt(n) (the sum
 //     of n independent N(0, sigma^2) is N(0, n sigma^2); wrapping to [0,1) commutes with summation).
 // A coordinate that has never been read: during the replay of the start state (iteration 0) it takes
-// the bootstrap candidate's value IndependentSource(jobSeed, candidate).valueAt(s, j); afterwards it is
+// the bootstrap candidate's value IndependentSource::candidate(jobSeed, candidate).valueAt(s, j); afterwards it is
 // a fresh uniform from the chain's own generator (the start state's unread coordinates are independent
 // uniforms, and uniform + any mutation mod 1 is uniform, so no pending steps need applying).
 //

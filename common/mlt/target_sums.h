@@ -1,7 +1,7 @@
-// Sums of the target function c over independent uniform samples of one path length, and the pooled
-// estimate of b_k they give: b refined as the job runs. Derivation (D3, D4) in common/mlt/develop.h.
-// A job keeps one TargetSums per path length slot for its bootstrap (Normalization::bootstrapSums) and
-// one per slot for the large steps of its chains (ChainStats::largeStepSums); both merge by addition.
+// b refined as the job runs (derivation (D3)-(D5) in common/mlt/develop.h): per path length slot, the
+// bootstrap's estimate (Normalization::bootstrapB: mean, standard error from its randomization groups,
+// and c's variance per uniform sample) is combined with the sums of c over the chains' large steps
+// (ChainStats::largeStepSums, merged by addition).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -32,7 +32,7 @@ struct BEstimate {
   uint64_t samples = 0;
 };
 
-// (D3, D4): the pooled mean of bootstrap and large-step samples and its standard error.
+// The pooled mean and standard error of i.i.d. samples (two sets of them).
 inline BEstimate pooledB(const TargetSums& bootstrap, const TargetSums& largeSteps) {
   TargetSums all = bootstrap;
   all.add(largeSteps);
@@ -43,6 +43,30 @@ inline BEstimate pooledB(const TargetSums& bootstrap, const TargetSums& largeSte
   e.b = all.sum / N;                                                        // (D3)
   if (all.n > 1) e.stdErr = std::sqrt(std::max(0.0, (all.sumSq - N * e.b * e.b) / (N - 1)) / N);  // (D4)
   return e;
+}
+
+// The bootstrap's estimate of one length's b: mean of its candidates, the standard error of that mean
+// (from the spread of its randomization groups' means: the candidates' film positions are spread evenly,
+// which an i.i.d. formula would not see), and the variance of c for one uniform sample (which is what
+// each large step is).
+struct BootstrapEstimate {
+  uint64_t n = 0;
+  double b = 0, stdErr = 0, sampleVar = 0;
+  bool operator==(const BootstrapEstimate&) const = default;
+};
+
+// (D5): the bootstrap's b and the large steps' mean, weighted by inverse variance. The large steps' variance
+// is the model sampleVar / n_L, computed from the bootstrap, never from the large steps themselves:
+// weights that depend on the values they weight would bias a heavy-tailed c low.
+inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large) {
+  if (large.n == 0) return {boot.b, boot.stdErr, boot.n};
+  const double bL = large.sum / double(large.n);
+  if (boot.n == 0) return pooledB({}, large);
+  const double v0 = boot.stdErr * boot.stdErr, vL = boot.sampleVar / double(large.n);
+  const uint64_t n = boot.n + large.n;
+  if (!(v0 + vL > 0)) return {(boot.b * double(boot.n) + bL * double(large.n)) / double(n), 0.0, n};
+  const double w0 = vL / (v0 + vL);  // the bootstrap's weight
+  return {w0 * boot.b + (1 - w0) * bL, std::sqrt(v0 * vL / (v0 + vL)), n};
 }
 
 // Element-wise sum of per-slot sums (the shorter side counts as zero).

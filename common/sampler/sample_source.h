@@ -22,6 +22,7 @@
 // A fixed block size per vertex is what lets a reversible-jump chain rewrite vertex i alone.
 // -----------------------------------------------------------------------------------------------
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -53,24 +54,61 @@ class SampleSource {
   }
 };
 
+// Bootstrap candidates spread their film positions (Camera [0,1]) evenly over the film: candidate i of a
+// path length slot (index = slot << kCandidateSlotBits | i) belongs to randomization group
+// g = i mod kCandidateGroups and takes point n = i / kCandidateGroups of the Halton sequence (bases 2, 3),
+// shifted modulo 1 by a random offset of (seed, slot, g) (Cranley-Patterson rotation). Each candidate's
+// film position is still uniform on its own, so every estimate over candidates stays unbiased and a chain
+// started from one is exact; but the image's bright and dark regions are visited in proportion, which
+// removes the between-pixel variance from b's estimate (a visible light covering 1% of the film made a
+// uniform c vary by ~6x its mean). The groups are independent randomizations of one point set: the
+// spread of their means gives b's standard error (common/mlt/bootstrap.cpp).
+constexpr int kCandidateSlotBits = 40;
+constexpr uint64_t kCandidateGroups = 16;
+float candidateFilmCoordinate(uint64_t seed, uint64_t candidate, int axis);  // axis 0: x, 1: y
+
 // Fresh uniform numbers. Coordinate j of stream s is hashUniform(seed, index, s, j): a pure function,
 // so a bootstrap candidate (seed = job seed, index = candidate index) can be replayed exactly by a
-// worker, and coordinates may be read in any order.
+// worker, and coordinates may be read in any order. candidate() makes the bootstrap's sources, whose
+// film position is candidateFilmCoordinate instead.
 class IndependentSource final : public SampleSource {
  public:
   IndependentSource(uint64_t seed, uint64_t index) : seed_(seed), index_(index) {}
+  static IndependentSource candidate(uint64_t seed, uint64_t index) {
+    IndependentSource s(seed, index);
+    s.candidate_ = true;
+    return s;
+  }
   void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; }
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
   float next1D() override { return valueAt(stream_, next_++); }
   float valueAt(int stream, int coordinate) const {
+    if (candidate_ && stream == int(Stream::Camera) && coordinate < 2)
+      return candidateFilmCoordinate(seed_, index_, coordinate);
     return hashUniform(seed_, index_, static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate));
   }
 
  private:
   uint64_t seed_, index_;
+  bool candidate_ = false;
   int stream_ = 0, next_ = 0;
 };
+
+inline float candidateFilmCoordinate(uint64_t seed, uint64_t candidate, int axis) {
+  const uint64_t slot = candidate >> kCandidateSlotBits;
+  const uint64_t i = candidate & ((uint64_t(1) << kCandidateSlotBits) - 1);
+  const uint64_t g = i % kCandidateGroups, n = i / kCandidateGroups;
+  double h = 0;  // radical inverse of n in base 2 (axis 0) or 3 (axis 1)
+  const uint64_t base = axis == 0 ? 2 : 3;
+  double f = 1.0 / double(base);
+  for (uint64_t m = n; m > 0; m /= base, f /= double(base)) h += f * double(m % base);
+  const double shift = double(hashKeys(seed, slot, g, 0x66696c6dULL, uint64_t(axis)) >> 11) * 0x1p-53;
+  double v = h + shift;
+  v -= std::floor(v);
+  const float out = static_cast<float>(v);
+  return out < 1.0f ? out : 0.0f;
+}
 
 // A fixed vector per stream; reads past the end return `fill`. For tests and for replaying a path.
 class ReplaySource final : public SampleSource {

@@ -75,7 +75,7 @@ CommandRun setupSubmit(CLI::App& sub) {
   sub.add_option("--samples-per-unit", o->samplesPerUnit, "pt/lt/bdpt: spp per work unit (0 = automatic)");
   sub.add_option("--mutations-per-pixel", o->mutationsPerPixel, "Markov chain methods")->capture_default_str();
   sub.add_option("--chains", o->chains, "Markov chain methods: chains (0 = automatic)");
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 2% of the mutations or of the time budget; b is refined by the chains' large steps)")->capture_default_str();
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (at most 4% of the mutations or of the time budget; b is refined by the chains' large steps)")->capture_default_str();
   sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")->capture_default_str();
   auto* maxDepth = sub.add_option("--max-depth", o->maxDepth, "Maximum path segments (default: the scene's)");
   auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's)");

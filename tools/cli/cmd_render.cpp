@@ -73,9 +73,9 @@ CommandRun setupRender(CLI::App& sub) {
       ->check(CLI::PositiveNumber);
   sub.add_option("--chains", o->chains, "Markov chain methods: number of chains (0 = automatic)")
       ->check(CLI::NonNegativeNumber);
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 2% of the mutations or of the time budget; b is refined by the chains' large steps)")
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (at most 4% of the mutations or of the time budget; b is refined by the chains' large steps)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::NonNegativeNumber);
   sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
