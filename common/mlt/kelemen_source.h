@@ -67,7 +67,7 @@ class KelemenSource final : public SampleSource {
   // ---- SampleSource -----------------------------------------------------------------------------
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
-  float next1D() override { return read(stream_, next_++); }
+  float next1D() override;  // = read(stream_, next_++), with read's body inlined
 
   // Current value of a coordinate (applies pending mutations, exactly like next1D()).
   float read(int stream, int index);
@@ -88,7 +88,10 @@ class KelemenSource final : public SampleSource {
   };
   struct Touched { int stream, index; };
 
-  Coord& coord(int stream, int index);
+  float readImpl(int stream, int index);
+  Coord& grow(int stream, int index);
+  float firstRead(int stream, int index);
+  float step(float v, uint32_t bits) const;  // one exponential-kernel step, offset from 32 random bits
 
   KelemenParams params_;
   IndependentSource candidate_;
@@ -103,6 +106,8 @@ class KelemenSource final : public SampleSource {
   // interpolated (relative error < 1e-6; the kernel stays symmetric, so the chain stays exact).
   static constexpr int kStepTable = 1024;
   float stepTable_[kStepTable + 1];
+  float stepDiff_[kStepTable];  // stepTable_[i + 1] - stepTable_[i] (the same float the lerp computed)
+  bool singleStepInline_;       // exponential kernel and uniformAfter_ > 1: n = 1 is one step()
   int64_t uniformAfter_;    // exponential kernel: after this many steps the offset is uniform to 2^-30
 };
 
