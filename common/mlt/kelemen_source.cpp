@@ -68,7 +68,7 @@ KelemenSource::KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint
   uniformAfter_ = params.kernel == SmallStepKernel::Kelemen ? exponentialUniformAfter(params.s1, params.s2) : 0;
   singleStepInline_ = params.kernel == SmallStepKernel::Kelemen && uniformAfter_ > 1;
   for (auto& v : coords_) v.reserve(128);
-  touched_.reserve(256);
+  touched_.resize(256);
 }
 
 MutationType KelemenSource::startIteration() {
@@ -80,22 +80,23 @@ MutationType KelemenSource::startIteration() {
 void KelemenSource::startIteration(MutationType type) {
   ++iteration_;
   largeStep_ = type == MutationType::Large;
-  touched_.clear();
+  nTouched_ = 0;
 }
 
 void KelemenSource::accept() {
   if (largeStep_) lastLargeStep_ = iteration_;
-  touched_.clear();
+  nTouched_ = 0;
 }
 
 void KelemenSource::reject() {
   if (iteration_ == 0) throw std::logic_error("KelemenSource::reject: the start state (iteration 0) cannot be rejected");
-  for (const Touched& t : touched_) {
+  for (size_t i = 0; i < nTouched_; ++i) {
+    const Touched& t = touched_[i];
     Coord& c = coords_[t.stream][t.index];
     c.value = c.backupValue;
     c.modify = c.backupModify;
   }
-  touched_.clear();
+  nTouched_ = 0;
   --iteration_;
 }
 
@@ -107,7 +108,8 @@ void KelemenSource::reject() {
   if (c.modify == iteration_) return c.value;  // already brought up to date in this iteration
   c.backupValue = c.value;
   c.backupModify = c.modify;
-  touched_.push_back({stream, index});
+  if (nTouched_ == touched_.size()) [[unlikely]] touched_.resize(2 * touched_.size());
+  touched_[nTouched_++] = {stream, index};
   if (c.modify == kNeverRead) [[unlikely]] {
     c.value = firstRead(stream, index);
   } else if (largeStep_) {
@@ -137,7 +139,32 @@ void KelemenSource::reject() {
 }
 
 float KelemenSource::read(int stream, int index) { return readImpl(stream, index); }
-float KelemenSource::next1D() { return readImpl(stream_, next_++); }
+// The common cases without a call (no registers to save), exactly as readImpl() treats them: a coordinate
+// already current; in a small step, one that was current in the previous iteration (one step); in a
+// large step, any coordinate read before (a fresh uniform).
+float KelemenSource::next1D() {
+  const int stream = stream_, index = next_++;
+  std::vector<Coord>& v = coords_[stream];
+  if (static_cast<size_t>(index) < v.size()) [[likely]] {
+    Coord& c = v[index];
+    if (c.modify == iteration_) return c.value;
+    if (nTouched_ < touched_.size()) [[likely]] {
+      // c.modify >= lastLargeStep_ >= 0 excludes kNeverRead (and iteration 0).
+      const bool oneStep = !largeStep_ && singleStepInline_ && c.modify == iteration_ - 1 && c.modify >= lastLargeStep_;
+      const bool redraw = largeStep_ && c.modify != kNeverRead;
+      if (oneStep || redraw) {
+        c.backupValue = c.value;
+        c.backupModify = c.modify;
+        touched_[nTouched_++] = {stream, index};
+        c.value = redraw ? rng_.uniform() : step(c.value, rng_.nextU32());
+        c.modify = iteration_;
+        return c.value;
+      }
+    }
+  }
+  return readSlow(stream, index);
+}
+[[gnu::noinline]] float KelemenSource::readSlow(int stream, int index) { return readImpl(stream, index); }
 
 // Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
 // One 32-bit draw: bit 31 is the sign, the low 24 bits are U (table index + interpolation weight).

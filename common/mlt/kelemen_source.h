@@ -89,6 +89,7 @@ class KelemenSource final : public SampleSource {
   struct Touched { int stream, index; };
 
   float readImpl(int stream, int index);
+  float readSlow(int stream, int index);
   Coord& grow(int stream, int index);
   float firstRead(int stream, int index);
   float step(float v, uint32_t bits) const;  // one exponential-kernel step, offset from 32 random bits
@@ -97,7 +98,8 @@ class KelemenSource final : public SampleSource {
   IndependentSource candidate_;
   Pcg32 rng_;
   std::vector<Coord> coords_[kNumStreams];
-  std::vector<Touched> touched_;
+  std::vector<Touched> touched_;  // the first nTouched_ entries (grown, never shrunk)
+  size_t nTouched_ = 0;
   int64_t iteration_ = 0, lastLargeStep_ = 0;
   bool largeStep_ = false;
   int stream_ = 0, next_ = 0;
