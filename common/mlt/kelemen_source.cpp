@@ -1,5 +1,6 @@
 #include "common/mlt/kelemen_source.h"
 
+#include <bit>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -63,9 +64,11 @@ KelemenSource::KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint
   logRatio_ = std::log(params.s2 / params.s1);
   for (int i = 0; i <= kStepTable; ++i)
     stepTable_[i] = float(double(params.s2) * std::exp(-double(logRatio_) * i / kStepTable));
+  for (int i = 0; i < kStepTable; ++i) stepDiff_[i] = stepTable_[i + 1] - stepTable_[i];
   uniformAfter_ = params.kernel == SmallStepKernel::Kelemen ? exponentialUniformAfter(params.s1, params.s2) : 0;
+  singleStepInline_ = params.kernel == SmallStepKernel::Kelemen && uniformAfter_ > 1;
   for (auto& v : coords_) v.reserve(128);
-  touched_.reserve(256);
+  touched_.resize(256);
 }
 
 MutationType KelemenSource::startIteration() {
@@ -77,41 +80,38 @@ MutationType KelemenSource::startIteration() {
 void KelemenSource::startIteration(MutationType type) {
   ++iteration_;
   largeStep_ = type == MutationType::Large;
-  touched_.clear();
+  nTouched_ = 0;
 }
 
 void KelemenSource::accept() {
   if (largeStep_) lastLargeStep_ = iteration_;
-  touched_.clear();
+  nTouched_ = 0;
 }
 
 void KelemenSource::reject() {
   if (iteration_ == 0) throw std::logic_error("KelemenSource::reject: the start state (iteration 0) cannot be rejected");
-  for (const Touched& t : touched_) {
+  for (size_t i = 0; i < nTouched_; ++i) {
+    const Touched& t = touched_[i];
     Coord& c = coords_[t.stream][t.index];
     c.value = c.backupValue;
     c.modify = c.backupModify;
   }
-  touched_.clear();
+  nTouched_ = 0;
   --iteration_;
 }
 
-KelemenSource::Coord& KelemenSource::coord(int stream, int index) {
-  auto& v = coords_[stream];
-  if (static_cast<size_t>(index) >= v.size()) v.resize(static_cast<size_t>(index) + 1);
-  return v[index];
-}
-
-float KelemenSource::read(int stream, int index) {
-  Coord& c = coord(stream, index);
+// The hot path of every chain (~45 reads per pssmlt mutation): one function with the common cases
+// inlined (coordinate already current; one pending small step), shared by next1D() and read().
+[[gnu::always_inline]] inline float KelemenSource::readImpl(int stream, int index) {
+  std::vector<Coord>& v = coords_[stream];
+  Coord& c = static_cast<size_t>(index) < v.size() ? v[index] : grow(stream, index);
   if (c.modify == iteration_) return c.value;  // already brought up to date in this iteration
   c.backupValue = c.value;
   c.backupModify = c.modify;
-  touched_.push_back({stream, index});
-  if (c.modify == kNeverRead) {
-    // Iteration 0 replays the bootstrap candidate; later, an unread coordinate of the current state is
-    // an independent uniform (see the header), drawn from the chain's own stream.
-    c.value = iteration_ == 0 ? candidate_.valueAt(stream, index) : rng_.uniform();
+  if (nTouched_ == touched_.size()) [[unlikely]] touched_.resize(2 * touched_.size());
+  touched_[nTouched_++] = {stream, index};
+  if (c.modify == kNeverRead) [[unlikely]] {
+    c.value = firstRead(stream, index);
   } else if (largeStep_) {
     c.value = rng_.uniform();
   } else {
@@ -119,10 +119,72 @@ float KelemenSource::read(int stream, int index) {
       c.value = rng_.uniform();
       c.modify = lastLargeStep_;
     }
-    if (iteration_ > c.modify) c.value = mutate(c.value, iteration_ - c.modify);
+    const int64_t n = iteration_ - c.modify;
+    if (n == 1 && singleStepInline_) c.value = step(c.value, rng_.nextU32());  // == mutate(c.value, 1)
+    else if (n > 0) c.value = mutate(c.value, n);
   }
   c.modify = iteration_;
   return c.value;
+}
+
+// The rare paths, kept out of readImpl so that its common path stays short.
+[[gnu::noinline, gnu::cold]] KelemenSource::Coord& KelemenSource::grow(int stream, int index) {
+  coords_[stream].resize(static_cast<size_t>(index) + 1);
+  return coords_[stream][index];
+}
+// Iteration 0 replays the bootstrap candidate; later, an unread coordinate of the current state is an
+// independent uniform (see the header), drawn from the chain's own stream.
+[[gnu::noinline]] float KelemenSource::firstRead(int stream, int index) {
+  return iteration_ == 0 ? candidate_.valueAt(stream, index) : rng_.uniform();
+}
+
+float KelemenSource::read(int stream, int index) { return readImpl(stream, index); }
+// The common cases without a call (no registers to save), exactly as readImpl() treats them: a coordinate
+// already current; in a small step, one that was current in the previous iteration (one step); in a
+// large step, any coordinate read before (a fresh uniform).
+float KelemenSource::next1D() {
+  const int stream = stream_, index = next_++;
+  std::vector<Coord>& v = coords_[stream];
+  if (static_cast<size_t>(index) < v.size()) [[likely]] {
+    Coord& c = v[index];
+    if (c.modify == iteration_) return c.value;
+    if (nTouched_ < touched_.size()) [[likely]] {
+      // c.modify >= lastLargeStep_ >= 0 excludes kNeverRead (and iteration 0).
+      const bool oneStep = !largeStep_ && singleStepInline_ && c.modify == iteration_ - 1 && c.modify >= lastLargeStep_;
+      const bool redraw = largeStep_ && c.modify != kNeverRead;
+      if (oneStep || redraw) {
+        c.backupValue = c.value;
+        c.backupModify = c.modify;
+        touched_[nTouched_++] = {stream, index};
+        c.value = redraw ? rng_.uniform() : step(c.value, rng_.nextU32());
+        c.modify = iteration_;
+        return c.value;
+      }
+    }
+  }
+  return readSlow(stream, index);
+}
+[[gnu::noinline]] float KelemenSource::readSlow(int stream, int index) { return readImpl(stream, index); }
+
+// Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
+// One 32-bit draw: bit 31 is the sign, the low 24 bits are U (table index + interpolation weight).
+// Branch-free on the sign (a coin flip the predictor cannot learn): v - dv is computed as v + (-dv),
+// which IEEE 754 defines to be the same number; each wrap test can only fire for its own sign (v + dv >= 0
+// and v - dv < 1 for v in [0, 1)), so the results are those of the two-branch form bit for bit.
+[[gnu::always_inline]] inline float KelemenSource::step(float v, uint32_t bits) const {
+  const uint32_t u24 = bits & 0xffffffu;
+  const uint32_t idx = u24 >> 14;  // 10 bits: kStepTable = 1024
+  const float frac = float(u24 & 0x3fffu) * (1.0f / 16384.0f);
+  const float dv = stepTable_[idx] + frac * stepDiff_[idx];
+  const float sdv = std::bit_cast<float>(std::bit_cast<uint32_t>(dv) ^ (~bits & 0x80000000u));  // bit 31 set: +dv
+  v += sdv;
+  if (v >= 1) [[unlikely]] {
+    v -= 1;
+  } else if (v < 0) [[unlikely]] {
+    v += 1;
+    if (v >= 1) v = 0;  // -tiny + 1 rounds to 1.0f
+  }
+  return v;
 }
 
 float KelemenSource::mutate(float v, int64_t n) {
@@ -133,23 +195,7 @@ float KelemenSource::mutate(float v, int64_t n) {
     return wrap01(double(v) + params_.sigma * std::sqrt(double(n)) * z);
   }
   if (n >= uniformAfter_) return rng_.uniform();
-  for (int64_t i = 0; i < n; ++i) {
-    // Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
-    // One 32-bit draw: bit 31 is the sign, the low 24 bits are U (table index + interpolation weight).
-    const uint32_t bits = rng_.nextU32();
-    const uint32_t u24 = bits & 0xffffffu;
-    const uint32_t idx = u24 >> 14;  // 10 bits: kStepTable = 1024
-    const float frac = float(u24 & 0x3fffu) * (1.0f / 16384.0f);
-    const float dv = stepTable_[idx] + frac * (stepTable_[idx + 1] - stepTable_[idx]);
-    if (bits & 0x80000000u) {
-      v += dv;
-      if (v >= 1) v -= 1;
-    } else {
-      v -= dv;
-      if (v < 0) v += 1;
-      if (v >= 1) v = 0;  // -tiny + 1 rounds to 1.0f
-    }
-  }
+  for (int64_t i = 0; i < n; ++i) v = step(v, rng_.nextU32());
   return v;
 }
 

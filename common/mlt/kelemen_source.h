@@ -67,7 +67,7 @@ class KelemenSource final : public SampleSource {
   // ---- SampleSource -----------------------------------------------------------------------------
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
-  float next1D() override { return read(stream_, next_++); }
+  float next1D() override;  // = read(stream_, next_++), with read's body inlined
 
   // Current value of a coordinate (applies pending mutations, exactly like next1D()).
   float read(int stream, int index);
@@ -88,13 +88,18 @@ class KelemenSource final : public SampleSource {
   };
   struct Touched { int stream, index; };
 
-  Coord& coord(int stream, int index);
+  float readImpl(int stream, int index);
+  float readSlow(int stream, int index);
+  Coord& grow(int stream, int index);
+  float firstRead(int stream, int index);
+  float step(float v, uint32_t bits) const;  // one exponential-kernel step, offset from 32 random bits
 
   KelemenParams params_;
   IndependentSource candidate_;
   Pcg32 rng_;
   std::vector<Coord> coords_[kNumStreams];
-  std::vector<Touched> touched_;
+  std::vector<Touched> touched_;  // the first nTouched_ entries (grown, never shrunk)
+  size_t nTouched_ = 0;
   int64_t iteration_ = 0, lastLargeStep_ = 0;
   bool largeStep_ = false;
   int stream_ = 0, next_ = 0;
@@ -103,6 +108,8 @@ class KelemenSource final : public SampleSource {
   // interpolated (relative error < 1e-6; the kernel stays symmetric, so the chain stays exact).
   static constexpr int kStepTable = 1024;
   float stepTable_[kStepTable + 1];
+  float stepDiff_[kStepTable];  // stepTable_[i + 1] - stepTable_[i] (the same float the lerp computed)
+  bool singleStepInline_;       // exponential kernel and uniformAfter_ > 1: n = 1 is one step()
   int64_t uniformAfter_;    // exponential kernel: after this many steps the offset is uniform to 2^-30
 };
 

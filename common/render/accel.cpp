@@ -37,6 +37,8 @@ struct Accel::Impl {
 
 namespace {
 
+thread_local RayObserver* tlRayObserver = nullptr;
+
 RTCRayHit toRtc(const Ray& ray) {
   RTCRayHit rh{};
   rh.ray.org_x = ray.o.x;
@@ -112,7 +114,14 @@ Accel::Accel(const std::vector<MeshDesc>& meshes) : impl_(std::make_unique<Impl>
 
 Accel::~Accel() = default;
 
+RayObserver* setThreadRayObserver(RayObserver* observer) {
+  RayObserver* previous = tlRayObserver;
+  tlRayObserver = observer;
+  return previous;
+}
+
 std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
+  if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh = toRtc(ray);
@@ -149,6 +158,7 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
 }
 
 bool Accel::occluded(const Ray& ray) const {
+  if (tlRayObserver) [[unlikely]] tlRayObserver->shadow(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh = toRtc(ray);

@@ -9,6 +9,18 @@
 
 namespace mlt {
 
+// Sees every ray an Accel traces on the calling thread, before it is traced (benchmarks record the rays
+// of a Markov chain to time them in isolation: tests/bench/mutation_cost_bench.cpp). Off by default; the
+// cost when off is one thread-local load per ray.
+class RayObserver {
+ public:
+  virtual ~RayObserver() = default;
+  virtual void closestHit(const Ray& ray) = 0;
+  virtual void shadow(const Ray& ray) = 0;
+};
+// Installs `observer` for the calling thread (nullptr = none); returns the previous one.
+RayObserver* setThreadRayObserver(RayObserver* observer);
+
 class Accel {
  public:
   // Builds one Embree scene with a triangle geometry per mesh (geometry id = mesh index).
