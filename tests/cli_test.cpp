@@ -95,6 +95,23 @@ TEST_F(Cli, UsageErrorsAreRejected) {
   EXPECT_NE(help.output.find("segments"), std::string::npos) << help.output;
 }
 
+// submit shares render's settings options (tools/cli/settings_options.h): a bad value is refused before
+// any connection is attempted (nothing listens on port 1), with a message naming the option.
+TEST_F(Cli, SubmitRefusesBadSettingsNamingTheOptionBeforeConnecting) {
+  const std::string submit = "submit " + kScenes + "cornell-box.xml --coordinator 127.0.0.1:1 ";
+  for (const char* bad : {"--sigma 0", "--kernel nonsense", "--splatting veach", "--spp 0", "--s1 0.1 --s2 0.05"}) {
+    const RunResult r = run(submit + bad);
+    EXPECT_NE(r.exitCode, 0) << bad << "\n" << r.output;
+    const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));
+    EXPECT_NE(r.output.find(option == "--s1" ? "--s2" : option), std::string::npos) << bad << "\n" << r.output;
+    EXPECT_EQ(r.output.find("127.0.0.1:1"), std::string::npos) << bad << ": tried to connect\n" << r.output;
+  }
+  const RunResult help = run("submit --help");
+  EXPECT_EQ(help.exitCode, 0);
+  for (const char* option : {"--kernel", "--s1", "--s2", "--sigma", "--splatting", "--separate-direct"})
+    EXPECT_NE(help.output.find(option), std::string::npos) << option << "\n" << help.output;
+}
+
 TEST_F(Cli, RenderWritesExrWithMetadataAndPngAndIsThreadCountIndependent) {
   const fs::path dir = tempDir();
   const std::string scene = kScenes + "cornell-box.xml";

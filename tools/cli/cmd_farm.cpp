@@ -1,5 +1,5 @@
 // Farm client subcommands: talk to a running mltfarm-coordinator.
-//   mltfarm submit SCENE.xml --coordinator ADDR [render settings] [--priority P] [--path] [--watch] [-o OUT.exr]
+//   mltfarm submit SCENE.xml --coordinator ADDR [render settings as for render] [--priority P] [--path] [--watch] [-o OUT.exr]
 //   mltfarm status JOB --coordinator ADDR       mltfarm jobs --coordinator ADDR
 //   mltfarm watch JOB --coordinator ADDR        mltfarm cancel JOB --coordinator ADDR
 //   mltfarm fetch JOB -o OUT.exr [--png OUT.png] --coordinator ADDR
@@ -14,6 +14,7 @@
 
 #include "coordinator/client.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/settings_options.h"
 
 namespace mlt::cli {
 namespace {
@@ -54,15 +55,12 @@ int watchToEnd(FarmClient& client, const std::string& jobId) {
 }
 
 // --- submit -----------------------------------------------------------------------------------
+// submit's own options; the render settings are the shared group (settings_options.h), the same as
+// `mltfarm render` takes.
 struct SubmitOptions {
   Connection conn;
-  std::string scene, method = "bdpt", name, out, png;
-  std::vector<std::string> defines;
-  int spp = 16, samplesPerUnit = 0, width = 0, height = 0, maxDepth = 5, rrDepth = 5, chains = 0,
-      bootstrap = 0, priority = 0;
-  double mutationsPerPixel = 16;
-  float largeStep = 0.3f;
-  uint64_t seed = 1;
+  std::string scene, name, out, png;
+  int priority = 0;
   bool path = false, watch = false;
 };
 
@@ -70,48 +68,22 @@ CommandRun setupSubmit(CLI::App& sub) {
   auto o = std::make_shared<SubmitOptions>();
   o->conn.add(sub);
   sub.add_option("scene", o->scene, "Scene file: uploaded with every file it references")->required();
-  sub.add_option("-m,--method", o->method, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")->capture_default_str();
-  auto* spp = sub.add_option("--spp", o->spp, "Samples per pixel (pt, lt, bdpt)");
-  sub.add_option("--samples-per-unit", o->samplesPerUnit, "pt/lt/bdpt: spp per work unit (0 = automatic)");
-  sub.add_option("--mutations-per-pixel", o->mutationsPerPixel, "Markov chain methods")->capture_default_str();
-  sub.add_option("--chains", o->chains, "Markov chain methods: chains (0 = automatic)");
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (at most 4% of the mutations or of the time budget; b is refined by the chains' large steps)")->capture_default_str();
-  sub.add_option("--large-step", o->largeStep, "Markov chain methods: large-step probability")->capture_default_str();
-  auto* maxDepth = sub.add_option("--max-depth", o->maxDepth, "Maximum path segments (default: the scene's)");
-  auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's)");
-  sub.add_option("--seed", o->seed, "Job seed")->capture_default_str();
-  auto* width = sub.add_option("--width", o->width, "Film width (default: the scene's)");
-  auto* height = sub.add_option("--height", o->height, "Film height (default: the scene's)");
+  const RenderSettingsOptions* settings = &addRenderSettingsOptions(sub);  // owned by `sub`
   sub.add_option("--priority", o->priority, "Higher runs first; FIFO within a priority")->capture_default_str();
   sub.add_option("--name", o->name, "Name shown in listings");
-  sub.add_option("-D,--define", o->defines, "Scene parameter name=value (Mitsuba's -D), repeatable");
   sub.add_flag("--path", o->path, "Send the scene's path instead of its files (the coordinator must read it)");
   sub.add_flag("--watch", o->watch, "Follow progress until the job ends");
   sub.add_option("-o,--output", o->out, "With --watch: fetch the EXR here when done");
   sub.add_option("--png", o->png, "With --watch: fetch the PNG here when done");
-  return [o, spp, maxDepth, rrDepth, width, height]() -> int {
+  return [o, settings]() -> int {
+    const CommandLineSettings given = settings->settings();
     wire::SubmittedSettings s;
-    s.settings.method = parseMethod(o->method);
-    s.settings.seed = o->seed;
-    s.settings.spp = o->spp;
-    s.hasSpp = spp->count() > 0;
-    s.settings.samplesPerUnit = o->samplesPerUnit;
-    s.settings.mutationsPerPixel = o->mutationsPerPixel;
-    s.settings.chains = o->chains;
-    s.settings.bootstrapSamples = o->bootstrap;
-    s.settings.largeStepProb = o->largeStep;
-    s.hasSize = width->count() > 0 || height->count() > 0;
-    s.settings.width = o->width;
-    s.settings.height = o->height;
-    s.hasMaxDepth = maxDepth->count() > 0;
-    s.settings.integrator.maxDepth = o->maxDepth;
-    s.hasRrDepth = rrDepth->count() > 0;
-    s.settings.integrator.rrDepth = o->rrDepth;
-    for (const std::string& d : o->defines) {
-      const size_t eq = d.find('=');
-      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--define '" + d + "': expected name=value");
-      s.defines[d.substr(0, eq)] = d.substr(eq + 1);
-    }
+    s.settings = given.settings;
+    s.hasSize = given.hasSize;
+    s.hasSpp = given.hasSpp;
+    s.hasMaxDepth = given.hasMaxDepth;
+    s.hasRrDepth = given.hasRrDepth;
+    s.defines = given.defines;
     FarmClient client(o->conn.channel);
     JobStatus st = client.submit(o->scene, s, o->priority, o->name, o->path);
     std::printf("%s\n", st.jobId.c_str());

@@ -6,13 +6,6 @@
 
 #include "tools/cli/commands.h"
 
-namespace mlt::cli {
-std::vector<CommandInfo>& commandRegistry() {
-  static std::vector<CommandInfo> registry;
-  return registry;
-}
-}  // namespace mlt::cli
-
 int main(int argc, char** argv) {
   using namespace mlt::cli;
   CLI::App app{"mltfarm: a Metropolis light transport render farm"};

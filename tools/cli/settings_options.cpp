@@ -1,0 +1,126 @@
+// The shared render-setting options (see settings_options.h). The help texts and defaults are those
+// `mltfarm render` always had; `submit` inherits them.
+#include "tools/cli/settings_options.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace mlt::cli {
+namespace {
+
+// (0, 1]: a step size in primary sample space. The wire refuses anything else (proto/convert.cpp), so the
+// local farm and `submit` would fail at the coordinator naming a wire field; this names the option.
+const CLI::Validator kUnitStep(
+    [](std::string& value) -> std::string {
+      double x = 0;
+      if (!CLI::detail::lexical_cast(value, x)) return "'" + value + "' is not a number";
+      return x > 0 && x <= 1 ? std::string() : "must be in (0, 1], got " + value;
+    },
+    "(0,1]", "UNIT_STEP");
+
+}  // namespace
+
+RenderSettingsOptions::RenderSettingsOptions(std::string description, std::string name, CLI::App* parent)
+    : CLI::Option_group(std::move(description), std::move(name), parent) {
+  add_option("-m,--method", method_, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}));
+  sppOpt_ = add_option("--spp", spp_, "Samples per pixel for pt, lt (light paths = spp * pixels) and bdpt (default: the scene's sampler sample_count, else 16)")
+                ->check(CLI::PositiveNumber);
+  add_option("--samples-per-unit", samplesPerUnit_,
+             "pt/lt/bdpt: samples per pixel in one work unit (0 = spp / 16, rounded up)")
+      ->check(CLI::NonNegativeNumber);
+  add_option("--mutations-per-pixel", mutationsPerPixel_, "Markov chain methods: mutations per pixel")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  add_option("--chains", chains_, "Markov chain methods: number of chains (0 = automatic)")
+      ->check(CLI::NonNegativeNumber);
+  add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (at most 4% of the mutations or of the time budget; b is refined by the chains' large steps)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  add_option("--large-step", largeStep_, "Markov chain methods: large-step probability")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  add_option("--kernel", kernel_,
+             "Markov chain methods: small-step kernel, kelemen (exponential, --s1/--s2) or gaussian (--sigma)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"kelemen", "gaussian"}));
+  add_option("--s1", s1_, "Kelemen kernel: smallest step")->check(kUnitStep);
+  add_option("--s2", s2_, "Kelemen kernel: largest step (at least --s1)")->check(kUnitStep);
+  add_option("--sigma", sigma_, "Gaussian kernel: standard deviation")->check(kUnitStep);
+  add_option("--splatting", splatting_,
+             "Markov chain methods: expected-value (Veach: proposal weighted by a, current state by 1 - a) "
+             "or kelemen-mis (Kelemen et al.'s large-step MIS weights)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
+  add_flag("--separate-direct", separateDirect_,
+           "pssmlt-bdpt, mmlt: render paths of up to 2 segments by bdpt (--spp samples) and let the chains do "
+           "only the longer ones (Veach's refinement)");
+  maxDepthOpt_ = add_option("--max-depth", maxDepth_,
+                            "Maximum path length in segments (edges): 1 = directly visible emitters "
+                            "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
+                            "<integrator> max_depth, else 5)")
+                     ->check(CLI::Range(-1, 1 << 20));
+  rrDepthOpt_ = add_option("--rr-depth", rrDepth_,
+                           "Russian roulette starts after this many segments (default: the scene's "
+                           "rr_depth, else 5)")
+                    ->check(CLI::NonNegativeNumber);
+  add_option("--seed", seed_, "Job seed (the image is a pure function of the settings and the seed)")
+      ->capture_default_str();
+  widthOpt_ = add_option("--width", width_, "Film width (default: the scene's)")->check(CLI::PositiveNumber);
+  CLI::Option* height = add_option("--height", height_, "Film height (default: the scene's)")->check(CLI::PositiveNumber);
+  widthOpt_->needs(height);
+  height->needs(widthOpt_);
+  add_option("-D,--define", defines_, "Scene parameter name=value (Mitsuba's -D), repeatable");
+}
+
+CommandLineSettings RenderSettingsOptions::settings() const {
+  CommandLineSettings out;
+  RenderSettings& s = out.settings;
+  s.method = parseMethod(method_);
+  s.seed = seed_;
+  s.width = width_;
+  s.height = height_;
+  out.hasSize = widthOpt_->count() > 0;  // --width and --height need each other
+  s.spp = spp_;
+  out.hasSpp = sppOpt_->count() > 0;
+  s.samplesPerUnit = samplesPerUnit_;
+  s.mutationsPerPixel = mutationsPerPixel_;
+  s.chains = chains_;
+  s.bootstrapSamples = bootstrap_;
+  s.largeStepProb = largeStep_;
+  s.kernel = kernel_ == "gaussian" ? MutationKernel::Gaussian : MutationKernel::Kelemen;
+  if (s2_ < s1_)  // the kernel's steps lie in [s1, s2] (Kelemen et al. 2002, eq. 9)
+    throw std::invalid_argument(fmt::format("--s2 ({}) must be at least --s1 ({})", s2_, s1_));
+  s.kelemenS1 = s1_;
+  s.kelemenS2 = s2_;
+  s.gaussianSigma = sigma_;
+  s.splatting = splatting_ == "kelemen-mis" ? MltSplatting::KelemenMIS : MltSplatting::ExpectedValue;
+  s.separateDirect = separateDirect_;
+  // Given depths go into the settings too; unset ones keep IntegratorSettings' defaults and are resolved
+  // against the scene's <integrator> by whoever loads it (the in-process renderer or the coordinator).
+  out.hasMaxDepth = maxDepthOpt_->count() > 0;
+  if (out.hasMaxDepth) s.integrator.maxDepth = maxDepth_;
+  out.hasRrDepth = rrDepthOpt_->count() > 0;
+  if (out.hasRrDepth) s.integrator.rrDepth = rrDepth_;
+  for (const std::string& d : defines_) {
+    const size_t eq = d.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw std::invalid_argument("--define '" + d + "': expected name=value");
+    out.defines[d.substr(0, eq)] = d.substr(eq + 1);
+  }
+  return out;
+}
+
+RenderSettingsOptions& addRenderSettingsOptions(CLI::App& app) {
+  return *app.add_option_group<RenderSettingsOptions>(RenderSettingsOptions::kGroupName);
+}
+
+const RenderSettingsOptions* findRenderSettingsOptions(const CLI::App& app) {
+  for (const CLI::App* group : app.get_subcommands([](const CLI::App* sub) { return sub->get_name().empty(); }))
+    if (const auto* options = dynamic_cast<const RenderSettingsOptions*>(group)) return options;
+  return nullptr;
+}
+
+}  // namespace mlt::cli
