@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "common/bsdf/fresnel.h"
+#include "common/bsdf/make_bsdf.h"
 #include "common/bsdf/microfacet.h"
 #include "common/bsdf/texture.h"
 #include "common/core/rng.h"
 #include "common/core/sampling.h"
-#include "common/render/bsdf.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
 

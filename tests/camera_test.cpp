@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "common/core/sampling.h"
-#include "common/render/camera.h"
+#include "common/camera/make_camera.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
 

@@ -9,7 +9,9 @@
 
 #include "common/core/sampling.h"
 #include "common/emitter/light_factories.h"
-#include "common/render/light.h"
+#include "common/emitter/light_sampler.h"
+#include "common/emitter/make_light.h"
+#include "common/interfaces/light.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
 

@@ -1,11 +1,11 @@
-// Constructors of the concrete BSDFs (one file each; Mitsuba semantics). makeBsdf (render/bsdf.h,
+// Constructors of the concrete BSDFs (one file each; Mitsuba semantics). makeBsdf (make_bsdf.h,
 // make_bsdf.cpp) validates a BsdfDesc and calls these. All BSDFs work in the local shading frame with
 // wo and wi pointing away from the surface, z > 0 being the exterior / front side.
 #pragma once
 #include <memory>
 
 #include "common/bsdf/texture.h"
-#include "common/render/bsdf.h"
+#include "common/interfaces/bsdf.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

@@ -1,12 +1,9 @@
-// Smooth (`conductor`) and rough (`roughconductor`) metals. One-sided, as in Mitsuba: zero when wo is
-// on the back. Rough: Torrance-Sparrow with the Smith G and exact conductor Fresnel at the half vector,
-// f = F(wo.h) D(h) G(wo, wi, h) / (4 cos_o cos_i) (Walter et al. 2007, eq. 20), sampled through the
-// visible normals seen from wo.
+// Smooth metal (Mitsuba's `conductor`): a Dirac reflection weighted by the exact conductor Fresnel term.
+// One-sided, as in Mitsuba: absorbed when wo is on the back.
 #include <cmath>
 
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
-#include "common/bsdf/microfacet.h"
 
 namespace mlt {
 
@@ -37,57 +34,10 @@ class Conductor final : public Bsdf {
   Color specR_;
 };
 
-class RoughConductor final : public Bsdf {
- public:
-  RoughConductor(MicrofacetType t, float alpha, Color eta, Color k, bool mirror, Color r)
-      : mf_(t, alpha), eta_(eta), k_(k), mirror_(mirror), specR_(r) {}
-
-  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
-    if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);
-    const Vec3 h = normalize(wo + wi);
-    const float D = mf_.D(h);
-    if (D == 0) return Color(0.0f);
-    const float G = mf_.G(wo, wi, h);
-    return specR_ * fresnel(dot(wo, h)) * (D * G / (4 * wo.z * wi.z));
-  }
-  // pdfW(wi) = D_wo(h) / (4 |wo.h|) (Walter et al. 2007, eq. 14 with the reflection Jacobian).
-  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
-    if (wo.z <= 0 || wi.z <= 0) return 0;
-    const Vec3 h = normalize(wo + wi);
-    const float woh = dot(wo, h);
-    if (woh <= 0) return 0;
-    return mf_.pdfVisible(wo, h) / (4 * woh);
-  }
-  std::optional<BsdfSample> sample(const Vec3& wo, float, Vec2 uDir, const BsdfQuery& q) const override {
-    if (wo.z <= 0) return std::nullopt;
-    const Vec3 m = mf_.sampleVisible(wo, uDir);
-    BsdfSample s;
-    s.wi = reflectAbout(wo, m);
-    if (s.wi.z <= 0) return std::nullopt;  // reflected below the horizon: absorbed (its mass is excluded from pdf)
-    s.f = eval(wo, s.wi, q);
-    s.pdfW = pdf(wo, s.wi, q);
-    s.pdfRevW = pdf(s.wi, wo, q);
-    if (s.pdfW <= 0) return std::nullopt;
-    return s;
-  }
-  bool isDelta() const override { return false; }
-  Color albedo(const Vec2&) const override { return specR_ * fresnel(1); }
-
- private:
-  Color fresnel(float c) const { return mirror_ ? Color(1.0f) : fresnelConductor(std::fmin(1.0f, c), eta_, k_); }
-  Microfacet mf_;
-  Color eta_, k_;
-  bool mirror_;
-  Color specR_;
-};
-
 }  // namespace
 
 std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, Color r) {
   return std::make_unique<Conductor>(eta, k, mirror, r);
-}
-std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType t, float alpha, Color eta, Color k, bool mirror, Color r) {
-  return std::make_unique<RoughConductor>(t, alpha, eta, k, mirror, r);
 }
 
 }  // namespace mlt

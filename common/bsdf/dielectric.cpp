@@ -1,6 +1,5 @@
-// Smooth dielectric interface (Mitsuba's `dielectric`) and thin dielectric slab (`thindielectric`).
-// Both are pure Dirac BSDFs: eval/pdf are 0, sample() picks reflection or transmission with the
-// Fresnel probability using uComponent (uDir is read but unused).
+// Smooth dielectric interface (Mitsuba's `dielectric`). A pure Dirac BSDF: eval/pdf are 0, sample()
+// picks reflection or transmission with the Fresnel probability using uComponent (uDir is read but unused).
 #include <cmath>
 
 #include "common/bsdf/bsdfs.h"
@@ -53,52 +52,8 @@ class Dielectric final : public Bsdf {
   Color specR_, specT_;
 };
 
-// Mitsuba's thin dielectric: a slab whose two interfaces are parallel; the infinite series of internal
-// reflections gives R' = R + T^2 R / (1 - R^2) and T' = 1 - R', with transmission straight through.
-class ThinDielectric final : public Bsdf {
- public:
-  ThinDielectric(float eta, Color r, Color t) : eta_(eta), specR_(r), specT_(t) {}
-
-  Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
-  float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }
-
-  std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2, const BsdfQuery&) const override {
-    if (wo.z == 0) return std::nullopt;
-    const float R = slabReflectance(std::fabs(wo.z)), T = 1 - R;
-    BsdfSample s;
-    s.delta = true;
-    s.eta = 1;
-    if (uc < R) {
-      s.wi = reflectZ(wo);
-      s.f = specR_ * (R / std::fabs(wo.z));
-      s.pdfW = s.pdfRevW = R;
-    } else {
-      s.wi = -wo;
-      s.f = specT_ * (T / std::fabs(wo.z));
-      s.pdfW = s.pdfRevW = T;
-    }
-    return s;
-  }
-  bool isDelta() const override { return true; }
-  Color albedo(const Vec2&) const override { return colorMax(specR_, specT_); }
-
-  float slabReflectance(float absCos) const {
-    float R = fresnelDielectric(absCos, eta_);
-    const float T = 1 - R;
-    if (R < 1) R += T * T * R / (1 - R * R);
-    return R;
-  }
-
- private:
-  float eta_;
-  Color specR_, specT_;
-};
-
 }  // namespace
 
 std::unique_ptr<Bsdf> makeDielectric(float eta, Color r, Color t) { return std::make_unique<Dielectric>(eta, r, t); }
-std::unique_ptr<Bsdf> makeThinDielectric(float eta, Color r, Color t) {
-  return std::make_unique<ThinDielectric>(eta, r, t);
-}
 
 }  // namespace mlt

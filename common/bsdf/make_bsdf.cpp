@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/bsdf/bsdfs.h"
+#include "common/bsdf/make_bsdf.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

@@ -8,6 +8,7 @@
 
 #include "common/core/sampling.h"
 #include "common/emitter/light_factories.h"
+#include "common/emitter/make_light.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

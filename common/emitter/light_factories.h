@@ -1,11 +1,11 @@
-// Constructors of the individual light types (one file each family); makeLight (light.h) dispatches on
+// Constructors of the individual light types (one file each); makeLight (make_light.h) dispatches on
 // LightDesc::Type. Each validates its parameters and throws std::runtime_error naming the field.
 #pragma once
 #include <memory>
 
 #include "common/core/color.h"
 #include "common/core/vec.h"
-#include "common/render/light.h"
+#include "common/interfaces/light.h"
 
 namespace mlt {
 

@@ -6,7 +6,7 @@
 //  - splats: sum of splatted values anywhere on the film (light tracing, bdpt's t=1, every MLT splat).
 //    Developed as splatSum * splatScale, where the caller supplies the scale:
 //      light tracing / bdpt t=1 with N light paths over P pixels:  P / N     (camera We is normalized
-//        over the whole film, see render/camera.h)
+//        over the whole film, see interfaces/camera.h)
 //      Markov chains:                                               b * P / M (M = total mutations;
 //        derivation in mlt/develop.h)
 //    There is one splat buffer per estimator *component* (a "layer"), each developed with its own scale:

@@ -28,7 +28,7 @@
 #include "common/core/color.h"
 #include "common/core/vec.h"
 #include "common/integrators/path_evaluator.h"
-#include "common/render/bsdf.h"
+#include "common/interfaces/bsdf.h"
 #include "common/sampler/sample_source.h"
 
 namespace mlt {

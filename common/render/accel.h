@@ -4,7 +4,7 @@
 #include <optional>
 #include <vector>
 
-#include "common/render/interaction.h"
+#include "common/interfaces/interaction.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

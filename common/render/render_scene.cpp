@@ -6,6 +6,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/bsdf/make_bsdf.h"
+#include "common/camera/make_camera.h"
+#include "common/emitter/make_light.h"
+
 namespace mlt {
 
 namespace {

@@ -6,10 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "common/emitter/light_sampler.h"
+#include "common/interfaces/bsdf.h"
+#include "common/interfaces/camera.h"
+#include "common/interfaces/light.h"
 #include "common/render/accel.h"
-#include "common/render/bsdf.h"
-#include "common/render/camera.h"
-#include "common/render/light.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

@@ -7,7 +7,7 @@
 
 #include "common/core/rng.h"
 #include "common/core/sampling.h"
-#include "common/render/bsdf.h"
+#include "common/bsdf/make_bsdf.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

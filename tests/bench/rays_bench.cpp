@@ -7,8 +7,8 @@
 
 #include "common/core/rng.h"
 #include "common/core/sampling.h"
+#include "common/camera/make_camera.h"
 #include "common/render/accel.h"
-#include "common/render/camera.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

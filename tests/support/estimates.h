@@ -3,7 +3,7 @@
 //
 // Samples come in batches of P = width * height: sample i uses IndependentSource(seed, i) and pixel
 // i mod P (stratified: each batch visits every pixel once), and its splats are binned by raster position.
-// With We normalized over the film (render/camera.h), the mean over a batch of the sum of each sample's
+// With We normalized over the film (interfaces/camera.h), the mean over a batch of the sum of each sample's
 // splats is an unbiased estimate of the image mean, whatever mix of camera-side (t >= 2) and light-side
 // (t = 1) splats they hold; restricted to a tile and times the number of tiles it estimates the tile
 // mean. Batches are independent: the standard error is the spread of the batch means / sqrt(batches).

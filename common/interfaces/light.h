@@ -1,14 +1,15 @@
 // Emitters: area lights on meshes, point, spot, directional and constant (environment) lights.
 // Densities carry their measure: pdfA (area, on the light), pdfW (solid angle), and for lights with a
 // delta position or direction the "pdf" of the delta part is 1 and the flag says so.
+//
+// Interface only: the concrete lights, makeLight and the LightSampler live in common/emitter/.
 #pragma once
-#include <memory>
 #include <optional>
-#include <vector>
 
 #include "common/core/color.h"
 #include "common/core/vec.h"
-#include "common/render/interaction.h"
+#include "common/interfaces/interaction.h"
+#include "common/interfaces/inverse.h"
 
 namespace mlt {
 
@@ -33,6 +34,12 @@ struct LightLeSample {     // emission: a ray leaving the light (light subpath s
   float pdfDir = 0;        // pdfW of the direction (1 for delta direction)
 };
 
+// Inverse of sampleLe() (reversible-jump MLT, see common/interfaces/inverse.h).
+struct LightLeInverse {
+  Inverse2D pos;           // uPos; jacobian = pdfPos of the origin (per unit area; infinite lights: on the disk)
+  Inverse2D dir;           // uDir; jacobian = pdfDir of the direction (per unit solid angle)
+};
+
 class Light {
  public:
   virtual ~Light() = default;
@@ -42,8 +49,23 @@ class Light {
   virtual std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const = 0;
   // Solid-angle density with which sampleLi(ref) picks direction wi hitting pLight with normal nLight.
   virtual float pdfLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight, const Vec3& wi) const = 0;
+  // Inverse of sampleLi(ref): the u with which it returns pLight (normal nLight); jacobian = the pdfA it
+  // reports (infinite lights: pdfW of the direction). uPick chooses among several preimages (e.g. the
+  // triangle picked through a CDF). nullopt: no inverse (the default) or pLight cannot be sampled.
+  virtual std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight,
+                                                  float uPick) const {
+    (void)ref; (void)pLight; (void)nLight; (void)uPick;
+    return std::nullopt;
+  }
   // Consumes 4 numbers: uPos (2), uDir (2).
   virtual std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const = 0;
+  // Inverse of sampleLe(): the (uPos, uDir) with which it emits a ray from pLight (normal nLight) in
+  // direction w. Same conventions as invertSampleLi.
+  virtual std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w,
+                                                       float uPick) const {
+    (void)pLight; (void)nLight; (void)w; (void)uPick;
+    return std::nullopt;
+  }
   // Densities of an emitted ray leaving pLight (normal nLight) in direction w.
   virtual void pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const = 0;
   // Area lights: radiance leaving a point with normal n in direction w (0 on the back side).
@@ -56,25 +78,6 @@ class Light {
   virtual bool deltaPosition() const { return false; }
   virtual bool deltaDirection() const { return false; }
   virtual bool infinite() const { return false; }
-};
-
-struct LightDesc;
-struct MeshDesc;
-std::unique_ptr<Light> makeLight(const LightDesc& desc);
-// An area light over every triangle of the mesh (uniform by area), emitting desc.emission on the front.
-std::unique_ptr<Light> makeAreaLight(const MeshDesc& mesh);
-
-// Picks a light in proportion to its power (alias-free: a CDF over lights; a handful of lights).
-class LightSampler {
- public:
-  explicit LightSampler(const std::vector<const Light*>& lights);
-  // Consumes 1 number. Returns the light index and its probability; -1 if there are no lights.
-  int sample(float u, float* pmf) const;
-  float pmf(int lightIndex) const;
-  size_t size() const { return pmf_.size(); }
-
- private:
-  std::vector<float> pmf_, cdf_;
 };
 
 }  // namespace mlt

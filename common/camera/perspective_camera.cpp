@@ -17,7 +17,7 @@
 #include <string>
 
 #include "common/core/sampling.h"
-#include "common/render/camera.h"
+#include "common/camera/make_camera.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt {

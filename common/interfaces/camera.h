@@ -2,13 +2,15 @@
 // (pbrt-v3 convention): the film plane at distance 1 has area A, and We = 1 / (A * lensArea * cos^4(theta))
 // for a direction inside the film frustum. A pixel's measurement is then P * E[...] where P is the
 // pixel count; film development applies that factor (see film/film.h), never the camera.
+//
+// Interface only: the perspective / thin-lens camera and makeCamera live in common/camera/.
 #pragma once
-#include <memory>
 #include <optional>
 
 #include "common/core/color.h"
 #include "common/core/vec.h"
-#include "common/render/interaction.h"
+#include "common/interfaces/interaction.h"
+#include "common/interfaces/inverse.h"
 
 namespace mlt {
 
@@ -27,6 +29,14 @@ struct CameraWiSample {  // BDPT t=1 / light tracing: connect a point to the len
   Vec2 pRaster;          // where the path lands on the film, in pixels ([0,W) x [0,H))
 };
 
+// Inverse of generateRay() (reversible-jump MLT, see common/interfaces/inverse.h): the raster position
+// and lens sample of a primary ray. The integrator maps primary numbers to pRaster (u * (W, H)).
+struct CameraRayInverse {
+  Vec2 pRaster;              // pixels, as generateRay takes it
+  float jacobianRaster = 0;  // |det d(pRaster) / d(w)|: pixels per unit solid angle of the direction
+  Inverse2D lens;            // uLens; jacobian = pdfPos of the lens point (per unit area; 1 for a pinhole)
+};
+
 class Camera {
  public:
   virtual ~Camera() = default;
@@ -34,6 +44,12 @@ class Camera {
   int height() const { return height_; }
   // pRaster in pixels, (0,0) = top-left corner of the film; uLens in [0,1)^2. Consumes nothing itself.
   virtual CameraRay generateRay(Vec2 pRaster, Vec2 uLens) const = 0;
+  // Inverse of generateRay(): the (pRaster, uLens) that generate `ray` (o on the lens, d unit), or
+  // nullopt: no inverse (the default) or the ray misses the film.
+  virtual std::optional<CameraRayInverse> invertGenerateRay(const Ray& ray) const {
+    (void)ray;
+    return std::nullopt;
+  }
   // Importance for a ray leaving the lens at ray.o in direction ray.d; sets *pRaster if the ray hits the
   // film. Zero outside the frustum.
   virtual Color We(const Ray& ray, Vec2* pRaster) const = 0;
@@ -41,6 +57,12 @@ class Camera {
   virtual void pdfWe(const Ray& ray, float* pdfPos, float* pdfDir) const = 0;
   // Consumes 2 numbers (uLens); nullopt if ref is not visible on the film.
   virtual std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 uLens) const = 0;
+  // Inverse of sampleWi(ref): the uLens with which it picks pLens; jacobian = pdfPos of pLens (per unit
+  // lens area). nullopt: no inverse (the default), a pinhole (nothing to invert), or ref not visible.
+  virtual std::optional<Inverse2D> invertSampleWi(const Vec3& ref, const Vec3& pLens) const {
+    (void)ref; (void)pLens;
+    return std::nullopt;
+  }
   // Raster position of a world point, if it lands on the film (pinhole projection through the lens center).
   virtual std::optional<Vec2> rasterPosition(const Vec3& p) const = 0;
   virtual bool deltaPosition() const = 0;  // pinhole
@@ -48,8 +70,5 @@ class Camera {
  protected:
   int width_ = 0, height_ = 0;
 };
-
-struct CameraDesc;
-std::unique_ptr<Camera> makeCamera(const CameraDesc& desc);
 
 }  // namespace mlt

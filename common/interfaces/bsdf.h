@@ -6,24 +6,36 @@
 // BSDF-level difference is refraction's 1/eta^2 radiance scaling (Veach 1997, sec. 5.2), applied in
 // Radiance mode only. The shading-normal correction for importance transport (Veach 1997, eq. 5.19)
 // depends on the geometric normal and is applied by the integrators (see shadingNormalCorrection).
+//
+// Interface only: the concrete BSDFs and makeBsdf live in common/bsdf/ (make_bsdf.h).
 #pragma once
-#include <memory>
+#include <cmath>
 #include <optional>
 
 #include "common/core/color.h"
 #include "common/core/vec.h"
+#include "common/interfaces/inverse.h"
 
 namespace mlt {
 
 enum class TransportMode { Radiance, Importance };
 
-struct BsdfSample {
+struct BsdfSample {  // what sample() returns
   Vec3 wi;
   Color f;            // BSDF value for (wo, wi); for a delta component the weight such that f*|cos|/pdfW is the throughput
   float pdfW = 0;     // solid-angle density of wi given wo (component choice included); for delta: the discrete probability
   float pdfRevW = 0;  // density of sampling wo given wi (needed by BDPT's MIS)
   bool delta = false; // sampled from a Dirac component
   float eta = 1;      // relative IOR crossed (1 for reflection)
+};
+
+// Inverse of sample() (reversible-jump MLT, see common/interfaces/inverse.h): the primary numbers
+// (uComponent, uDir) with which sample(wo, uComponent, uDir, q) returns wi.
+struct BsdfSampleInverse {
+  float uComponent = 0;
+  Vec2 uDir;
+  float jacobian = 0;  // |det du / d(wi)|, i.e. the pdfW sample() reports for wi (per unit solid angle,
+                       // component choice included; for a delta component its discrete probability)
 };
 
 // Evaluation context: the texture coordinate is all a BSDF may look at besides directions.
@@ -42,6 +54,14 @@ class Bsdf {
   virtual float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const = 0;
   // Consumes exactly kBsdfDims - 1 = 3 numbers: uComponent then uDir (2D). nullopt = absorbed.
   virtual std::optional<BsdfSample> sample(const Vec3& wo, float uComponent, Vec2 uDir, const BsdfQuery& q) const = 0;
+  // Inverse of sample(): the primary numbers that produce wi given wo, or nullopt when this BSDF has no
+  // inverse (the default) or sample() cannot produce wi. uPick (in [0,1)) chooses uniformly among the
+  // preimages where several exist (uComponent within the chosen component's interval).
+  virtual std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, float uPick,
+                                                        const BsdfQuery& q) const {
+    (void)wo; (void)wi; (void)uPick; (void)q;
+    return std::nullopt;
+  }
   // True if every component is a Dirac delta (mirror, glass): such a vertex cannot be connected to.
   virtual bool isDelta() const = 0;
   // Hemispherical albedo estimate for the given wo, used for Russian roulette hints only.
@@ -55,10 +75,5 @@ inline float shadingNormalCorrection(const Vec3& woW, const Vec3& wiW, const Vec
   const float den = std::fabs(dot(woW, ng)) * std::fabs(dot(wiW, ns));
   return den > 0 ? num / den : 0.0f;
 }
-
-struct BsdfDesc;
-struct SceneDesc;
-// Builds the BSDF for a description (textures loaded here). Throws std::runtime_error naming desc.id.
-std::unique_ptr<Bsdf> makeBsdf(const SceneDesc& scene, const BsdfDesc& desc);
 
 }  // namespace mlt

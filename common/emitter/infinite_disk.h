@@ -1,0 +1,19 @@
+// What the lights at infinity (directional, constant environment) share. They need the scene's bounding
+// sphere (center c, radius R), given by preprocess():
+//  - sampleLi puts pLight at ref + wi * 2R with nLight = -wi, so a shadow ray to it leaves the scene;
+//  - sampleLe starts rays on a disk of radius R perpendicular to the travel direction, a distance R
+//    "behind" the scene center (pbrt-v3): pdfPos = 1 / (pi R^2).
+#pragma once
+#include "common/core/sampling.h"
+#include "common/core/vec.h"
+
+namespace mlt {
+
+// Origin of an emitted ray travelling along w (unit) through the disk of radius R about c.
+inline Vec3 diskOrigin(const Vec3& c, float R, const Vec3& w, Vec2 uPos) {
+  const Frame f(w);
+  const Vec2 d = sampleConcentricDisk(uPos);
+  return c + (f.s * d.x + f.t * d.y) * R - w * R;
+}
+
+}  // namespace mlt
