@@ -190,5 +190,24 @@ TEST(Bootstrap, GrowsTheNoisiestLengthUntilBIsKnownToTheTarget) {
   EXPECT_EQ(std::memcmp(&one.b, &wide.b, sizeof(double)), 0);
 }
 
+// Budgeted sizing (automatic bootstrap of mmlt): a quarter per length to start with, then doublings of the
+// length whose b_k is least certain per candidate, within the total. The rare, bright length gets most of
+// the budget, the smooth one keeps its start, the total never exceeds the budget.
+TEST(Bootstrap, BudgetGoesToTheLengthWhoseBIsLeastCertain) {
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 5000;
+  bc.pathLengths = {1, 2};
+  bc.totalCandidates = 40000;
+  const BootstrapResult r = runBootstrap(bc, [] {
+    return [](uint64_t i, int k) {
+      const double u = IndependentSource(5, i).valueAt(0, 0);
+      return k == 1 ? (u < 0.005 ? 200.0 : 0.0) : 1.0 + 0.1 * u;
+    };
+  });
+  EXPECT_EQ(r.lengths[0].c.size(), 20000u);  // 5000 -> 10000 -> 20000; one more (+20000) would exceed 40000
+  EXPECT_EQ(r.lengths[1].c.size(), 5000u);   // smooth: its start is enough
+  EXPECT_EQ(r.candidates, 25000u);
+}
+
 }  // namespace
 }  // namespace mlt

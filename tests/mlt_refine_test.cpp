@@ -83,7 +83,7 @@ TEST(RefinedB, CombinationWeighsByInverseVarianceFromTheBootstrapsModel) {
   EXPECT_EQ(combineB({1000, 1.0, 0.0, 1.0}, large).b, 1.0);  // an exact bootstrap wins
 }
 
-TEST(RefinedB, CandidatesSpreadTheirFilmPositionsAndStayUniform) {
+TEST(RefinedB, CandidatesSpreadTheirFirstDecisionsAndStayUniform) {
   // Every group's first n points cover the film evenly: each of the 8x8 cells gets n/64 +- 2 of 16 * 1024.
   std::vector<int> cells(64, 0);
   for (uint64_t i = 0; i < 16 * 1024; ++i) {
@@ -93,8 +93,14 @@ TEST(RefinedB, CandidatesSpreadTheirFilmPositionsAndStayUniform) {
     ++cells[int(x * 8) * 8 + int(y * 8)];
   }
   for (int n : cells) EXPECT_NEAR(n, 256, 2 * 16);
-  // Other coordinates are the independent source's.
+  // Other coordinates are the independent source's; the technique and the light's are spread too.
   EXPECT_EQ(IndependentSource::candidate(3, 77).valueAt(int(Stream::Camera), 2), IndependentSource(3, 77).valueAt(int(Stream::Camera), 2));
+  EXPECT_EQ(IndependentSource::candidate(3, 77).valueAt(int(Stream::Light), 5), IndependentSource(3, 77).valueAt(int(Stream::Light), 5));
+  EXPECT_EQ(IndependentSource::candidate(3, 77).valueAt(int(Stream::Connect), 0), candidateCoordinate(3, 77, 2));
+  EXPECT_EQ(IndependentSource::candidate(3, 77).valueAt(int(Stream::Light), 4), candidateCoordinate(3, 77, 7));
+  std::vector<int> techniques(5, 0);  // base 5: 1024 points of one group fill 5 bins evenly (i.i.d.: +-13)
+  for (uint64_t i = 0; i < 16 * 1024; i += 16) ++techniques[int(candidateCoordinate(3, i, 2) * 5)];
+  for (int n : techniques) EXPECT_NEAR(n, 1024 / 5.0, 5);
   // Over randomizations (seeds), one candidate's position is uniform: a chi-square over 16 bins.
   std::vector<int> bins(16, 0);
   const int n = 16000;

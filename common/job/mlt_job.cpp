@@ -161,6 +161,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
+  if (lengths.size() > 1 && bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
+    // Several lengths: N per length on average. A quarter each to start with, then the budget goes where
+    // b's variance is (mmlt's length 1, a small light seen directly, needs far more than the others).
+    bc.totalCandidates = bc.candidatesPerLength * lengths.size();
+    bc.candidatesPerLength /= 4;
+  }
   const uint64_t seed = s.seed;
   const CandidateFnFactory candidates = [&scene, &s, seed]() -> CandidateFn {
     auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);

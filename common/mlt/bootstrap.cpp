@@ -21,7 +21,7 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
   if (config.pathLengths.empty()) throw std::invalid_argument("bootstrap: no path lengths");
   if (config.maxGrowth < 1) throw std::invalid_argument("bootstrap: maxGrowth must be >= 1");
   const uint64_t N0 = config.candidatesPerLength;
-  const uint64_t maxN = N0 * config.maxGrowth;
+  const uint64_t maxN = config.totalCandidates > 0 ? std::max(N0, config.totalCandidates) : N0 * config.maxGrowth;
   if (maxN >= (uint64_t(1) << kCandidateSlotBits))
     throw std::invalid_argument("bootstrap: too many candidates per path length: " + std::to_string(maxN));
   BootstrapResult result;
@@ -78,7 +78,23 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
   // Sizing: while b = sum b_k is not known to the target, double the length that contributes most to its
   // variance (lowest index on ties). Once that length is at its cap, stop: growing lengths whose variance
   // is smaller cannot bring the total under the target as fast as it costs (the summary warns instead).
+  while (config.totalCandidates > 0) {  // budgeted sizing
+    uint64_t total = 0;
+    size_t best = 0;
+    for (size_t l = 0; l < result.lengths.size(); ++l) {
+      total += result.lengths[l].c.size();
+      if (varMean[l] / double(result.lengths[l].c.size()) >
+          varMean[best] / double(result.lengths[best].c.size()))
+        best = l;
+    }
+    LengthBootstrap& lb = result.lengths[best];
+    const uint64_t n = lb.c.size();
+    if (!(varMean[best] > 0) || total + n > config.totalCandidates) break;
+    evaluate(lb, n, 2 * n);
+    reduce(best);
+  }
   for (;;) {
+    if (config.totalCandidates > 0) break;
     double b = 0, var = 0;
     for (size_t l = 0; l < result.lengths.size(); ++l) {
       b += result.lengths[l].b;

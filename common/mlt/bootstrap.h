@@ -38,6 +38,9 @@ struct BootstrapConfig {
   uint64_t candidatesPerLength = 100000;  // initial count per path length
   double targetRelStdErr = 0;             // 0: a fixed size
   uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength per length
+  // > 0: a budget instead of a target. After the first round, the length whose doubling removes most of
+  // b's variance per candidate (largest se_k^2 / n_k) doubles, while the total stays within the budget.
+  uint64_t totalCandidates = 0;
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
   uint64_t firstSlot = 0;                // slot of pathLengths[0] (a later block of lengths continues the slots)
   bool parallel = true;

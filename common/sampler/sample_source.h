@@ -54,23 +54,33 @@ class SampleSource {
   }
 };
 
-// Bootstrap candidates spread their film positions (Camera [0,1]) evenly over the film: candidate i of a
-// path length slot (index = slot << kCandidateSlotBits | i) belongs to randomization group
-// g = i mod kCandidateGroups and takes point n = i / kCandidateGroups of the Halton sequence (bases 2, 3),
-// shifted modulo 1 by a random offset of (seed, slot, g) (Cranley-Patterson rotation). Each candidate's
-// film position is still uniform on its own, so every estimate over candidates stays unbiased and a chain
-// started from one is exact; but the image's bright and dark regions are visited in proportion, which
-// removes the between-pixel variance from b's estimate (a visible light covering 1% of the film made a
-// uniform c vary by ~6x its mean). The groups are independent randomizations of one point set: the
-// spread of their means gives b's standard error (common/mlt/bootstrap.cpp).
+// Bootstrap candidates spread their first decisions evenly: the film position (Camera [0,1]), MMLT's
+// technique choice (Connect [0]) and the light's choice, position and direction (Light [0..4]) follow
+// the Halton sequence in bases 2, 3 | 5 | 7, 11, 13, 17, 19. Candidate i of a path length slot
+// (index = slot << kCandidateSlotBits | i) belongs to randomization group g = i mod kCandidateGroups and
+// takes point n = i / kCandidateGroups, shifted modulo 1 by a random offset of (seed, slot, g, axis)
+// (Cranley-Patterson rotation). Each candidate is still uniform on its own, so every estimate over
+// candidates stays unbiased and a chain started from one is exact; but the image's bright and dark
+// regions (and the techniques, and the light) are visited in proportion, which removes most of the
+// variance of b's estimate (a visible light covering 1% of the film made a uniform c vary by ~6x its
+// mean). The groups are independent randomizations of one point set: the spread of their means gives
+// b's standard error (common/mlt/bootstrap.cpp).
 constexpr int kCandidateSlotBits = 40;
 constexpr uint64_t kCandidateGroups = 16;
-float candidateFilmCoordinate(uint64_t seed, uint64_t candidate, int axis);  // axis 0: x, 1: y
+constexpr int kCandidateAxes = 8;
+// Axis a of the candidate's spread coordinates (0, 1: film; 2: technique; 3..7: light).
+float candidateCoordinate(uint64_t seed, uint64_t candidate, int axis);
+// The axis of (stream, coordinate) for a candidate, or -1 for an ordinary independent coordinate.
+constexpr int candidateAxis(int stream, int coordinate) {
+  if (stream == 0) return coordinate < 2 ? coordinate : -1;   // Camera: raster position
+  if (stream == 2) return coordinate == 0 ? 2 : -1;           // Connect: MMLT's technique
+  return coordinate < 5 ? 3 + coordinate : -1;                // Light: choice, position, direction
+}
 
 // Fresh uniform numbers. Coordinate j of stream s is hashUniform(seed, index, s, j): a pure function,
 // so a bootstrap candidate (seed = job seed, index = candidate index) can be replayed exactly by a
 // worker, and coordinates may be read in any order. candidate() makes the bootstrap's sources, whose
-// film position is candidateFilmCoordinate instead.
+// first decisions are candidateCoordinate instead.
 class IndependentSource final : public SampleSource {
  public:
   IndependentSource(uint64_t seed, uint64_t index) : seed_(seed), index_(index) {}
@@ -84,8 +94,8 @@ class IndependentSource final : public SampleSource {
   void seek(int index) override { next_ = index; }
   float next1D() override { return valueAt(stream_, next_++); }
   float valueAt(int stream, int coordinate) const {
-    if (candidate_ && stream == int(Stream::Camera) && coordinate < 2)
-      return candidateFilmCoordinate(seed_, index_, coordinate);
+    if (candidate_)
+      if (const int axis = candidateAxis(stream, coordinate); axis >= 0) return candidateCoordinate(seed_, index_, axis);
     return hashUniform(seed_, index_, static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate));
   }
 
@@ -95,12 +105,13 @@ class IndependentSource final : public SampleSource {
   int stream_ = 0, next_ = 0;
 };
 
-inline float candidateFilmCoordinate(uint64_t seed, uint64_t candidate, int axis) {
+inline float candidateCoordinate(uint64_t seed, uint64_t candidate, int axis) {
+  constexpr uint64_t kBases[kCandidateAxes] = {2, 3, 5, 7, 11, 13, 17, 19};
   const uint64_t slot = candidate >> kCandidateSlotBits;
   const uint64_t i = candidate & ((uint64_t(1) << kCandidateSlotBits) - 1);
   const uint64_t g = i % kCandidateGroups, n = i / kCandidateGroups;
-  double h = 0;  // radical inverse of n in base 2 (axis 0) or 3 (axis 1)
-  const uint64_t base = axis == 0 ? 2 : 3;
+  double h = 0;  // radical inverse of n in the axis' base
+  const uint64_t base = kBases[axis];
   double f = 1.0 / double(base);
   for (uint64_t m = n; m > 0; m /= base, f /= double(base)) h += f * double(m % base);
   const double shift = double(hashKeys(seed, slot, g, 0x66696c6dULL, uint64_t(axis)) >> 11) * 0x1p-53;
