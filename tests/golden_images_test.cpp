@@ -9,8 +9,9 @@
 //    mismatch means behaviour changed; re-record only for a deliberate change to the estimator itself.
 //  - pssmlt, pssmlt-bdpt, mmlt: also expected to be re-recorded when the Markov-chain normalization (the
 //    bootstrap's b, per-length b_k, development) changes on purpose; say so in the commit message.
-//    (Re-recorded once so far: b refined by the large steps, candidates with spread film positions, one
-//    film layer per path length; pt/lt/bdpt unchanged by it.)
+//    (Re-recorded so far: b refined by the large steps, candidates with spread film positions, one film
+//    layer per path length; then candidates with spread technique and light coordinates. pt/lt/bdpt
+//    unchanged by either.)
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -172,26 +173,26 @@ const Case kCases[] = {
     Case{"cornell-box", Method::LT, "27913ec2dcea2a849f89b4540baaa5671551030562d72ac315cb72c056568970"},
     Case{"cornell-box", Method::BDPT, "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
     Case{"cornell-box", Method::PSSMLT, "2b0748ec268fa88f86347213498ffe7022fd45711269066a058af5b15d9b0f64"},
-    Case{"cornell-box", Method::PSSMLT_BDPT, "04d9391ca967f9fb3e7dcbaafd6e3156cdd8b010c023bad4e818d05d93180c4b"},
-    Case{"cornell-box", Method::MMLT, "fce24d32e763cb5bd932642101784df866e3bff8aef9695f881557f202d49811"},
+    Case{"cornell-box", Method::PSSMLT_BDPT, "c3d79a6b2d324a84c4179a5055b7578bdc87d67aff6a21d17fab73bac8e593ce"},
+    Case{"cornell-box", Method::MMLT, "018fd1235d7d0f25fb5eb1276d2e8bbf432b4c394a5a60b713b31d55d87c0775"},
     Case{"caustic-mirror", Method::PT, "f0eefd870163c6d2f05d318c95c4da07454e3c9a69419e076abeb75c87c9a91e"},
     Case{"caustic-mirror", Method::LT, "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", Method::BDPT, "92feb07fc7ed17cc09b06ed10f7b2b16213aaff9fd612d39c4431df400085404"},
     Case{"caustic-mirror", Method::PSSMLT, "379a76fa7562260ddcd0e4f77fd83b5364ed9614b25ceb04a7d6eb035eb1a7c2"},
-    Case{"caustic-mirror", Method::PSSMLT_BDPT, "e272f8d005fbb98d622d58fdc42952edb572d2e9caa3f872fe80e22e4047a1f2"},
-    Case{"caustic-mirror", Method::MMLT, "15ce259160f81d8cfa91d1eb5a0763a51bcdac5db79807794e7fc6715acff611"},
+    Case{"caustic-mirror", Method::PSSMLT_BDPT, "4f7d9f86103479f1f78d7d96d55543eca9713f1f310ee233cce420a038bbdd63"},
+    Case{"caustic-mirror", Method::MMLT, "9706768b1614a91d31e63c5ad01975bfa1f97cfea4bc789dba232c981c88a61a"},
     Case{"glossy-plates", Method::PT, "02815dad258ffd85de16e76c23dd9a18b3acf6f96db4dc40ae4f782470ed7a21"},
     Case{"glossy-plates", Method::LT, "38ecfa4f006f75a499492f0fc7c423a9756cff27246bf236799d38d605aa8b38"},
     Case{"glossy-plates", Method::BDPT, "c557a931254401811d96f28cb2bdbd89daffd1b2cd6678b717760b9874d3275a"},
     Case{"glossy-plates", Method::PSSMLT, "ccbb12370977c6938b08334213f3eac1ce5995d2d1874364f71e2b39543ec854"},
-    Case{"glossy-plates", Method::PSSMLT_BDPT, "e16066fedfe85e08d510450971854fa3a47c0f0d758c35a1dea39d3ab0a259bb"},
-    Case{"glossy-plates", Method::MMLT, "61b77c9abcfceaea59fdb26bf0d64a2b9543480e2a493b8a5f1ac86d87dd1d99"},
+    Case{"glossy-plates", Method::PSSMLT_BDPT, "09ad7a202145fdf2b85f94c0e2bff1d520d2de8b236e024a6286fb198202f450"},
+    Case{"glossy-plates", Method::MMLT, "2ae17bc248195524f78a99cfee5b87deef0c39aefde68bcac502c9701f3f479c"},
     Case{"cornell-variety", Method::PT, "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", Method::LT, "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", Method::BDPT, "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
     Case{"cornell-variety", Method::PSSMLT, "aa749154896273ad5d7ebb63d6ac6efa4193cfc4b053820884584f5a8f89ea95"},
-    Case{"cornell-variety", Method::PSSMLT_BDPT, "86a73b3440fde77562ccf22559729283770db1b4a7f9c58ab95d4333d12cbc8e"},
-    Case{"cornell-variety", Method::MMLT, "67c818ffe331d2f85bc2f0690f3cd75cd561a931f971153e7c12ff0fc9b95b8a"},
+    Case{"cornell-variety", Method::PSSMLT_BDPT, "5ab2457091dbf0575456078d698ab929f8151a213fbbe4962367a9e7e6b6e322"},
+    Case{"cornell-variety", Method::MMLT, "39219d72c615874a0c5dc4799b5e5c8781e9e1deefbb1545787cd0c4bf43a1fc"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Bundled, GoldenImages, ::testing::ValuesIn(kCases),
