@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fmt/format.h>
+#include <optional>
 #include <random>
 
 #include "coordinator/bundle.h"
@@ -671,6 +672,7 @@ void Coordinator::merge(int64_t id) {
     tasks = job.tasks.size();
   }
   std::string error;
+  std::optional<RefinedB> refined;  // b as the image was developed with (bootstrap + large steps)
   try {
     PartialResult merged = emptyPartial(*plan);
     for (uint32_t t = 0; t < tasks; ++t) {  // index order: the bytes never depend on arrival order
@@ -685,6 +687,7 @@ void Coordinator::merge(int64_t id) {
     fs::path dir = jobDir(id);
     fs::create_directories(dir);
     writeFinalImages((dir / "image.tmp.exr").string(), (dir / "image.tmp.png").string(), identity, *plan, merged);
+    if (isMarkovChainMethod(plan->settings.method)) refined = refinedB(plan->norm, merged.stats);
     fs::rename(dir / "image.tmp.exr", dir / "image.exr");
     fs::rename(dir / "image.tmp.png", dir / "image.png");
   } catch (const std::exception& e) {
@@ -693,6 +696,10 @@ void Coordinator::merge(int64_t id) {
   std::lock_guard lock(mu_);
   Job& job = jobs_.at(id);
   if (job.status.state != JobState::Merging) return;
+  if (refined) {
+    job.status.b = refined->total.b;
+    job.status.bStdErr = refined->total.stdErr;
+  }
   if (!error.empty()) setState(job, JobState::Failed, "merge: " + error);
   else setState(job, JobState::Done);
 }
