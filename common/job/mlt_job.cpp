@@ -59,6 +59,16 @@ std::vector<int> chainPathLengths(const RenderSettings& s) {
   return lengths;
 }
 
+KelemenParams kelemenParams(const RenderSettings& s) {
+  KelemenParams p;
+  p.largeStepProb = s.largeStepProb;
+  p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
+  p.s1 = s.kelemenS1;
+  p.s2 = s.kelemenS2;
+  p.sigma = s.gaussianSigma;
+  return p;
+}
+
 uint64_t bootstrapPerLengthFor(const RenderSettings& s, double candidatesAffordable) {
   if (s.bootstrapSamples > 0) return uint64_t(s.bootstrapSamples);
   const double lengths = double(std::max<size_t>(chainPathLengths(s).size(), 1));
@@ -94,15 +104,6 @@ namespace {
 
 std::vector<int> chainLengths(const RenderSettings& s) { return chainPathLengths(s); }
 
-KelemenParams kelemenParams(const RenderSettings& s) {
-  KelemenParams p;
-  p.largeStepProb = s.largeStepProb;
-  p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
-  p.s1 = s.kelemenS1;
-  p.s2 = s.kelemenS2;
-  p.sigma = s.gaussianSigma;
-  return p;
-}
 
 // Settings of the direct-illumination pass (separateDirect): bdpt limited to kDirectMaxSegments.
 JobPlan directPlan(const JobPlan& plan) {

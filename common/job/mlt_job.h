@@ -8,6 +8,7 @@
 #include "common/job/render_job.h"
 #include "common/mlt/bootstrap.h"
 #include "common/mlt/develop.h"
+#include "common/mlt/kelemen_source.h"
 
 namespace mlt {
 
@@ -45,6 +46,8 @@ uint64_t bootstrapPerLengthFor(const RenderSettings& settings, double candidates
 constexpr int kUnlimitedLengthBlock = 8;
 constexpr double kNegligibleLengthShare = 1e-4;
 constexpr int kMaxUnlimitedLength = 1024;
+// The chain's sample-source parameters from the settings (large-step probability, kernel).
+KelemenParams kelemenParams(const RenderSettings& settings);
 // The path lengths a job's chains cover ({-1} for pssmlt methods; kMin..maxDepth for mmlt; for mmlt with
 // unlimited depth the first block, to which the bootstrap adds).
 std::vector<int> chainPathLengths(const RenderSettings& settings);

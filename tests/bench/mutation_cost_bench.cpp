@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "common/film/film.h"
+#include "common/job/mlt_job.h"
 #include "common/job/render_job.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/kelemen_source.h"
@@ -83,15 +84,6 @@ const Bundled& bundled() {
   return b;
 }
 
-KelemenParams kelemenParams(const RenderSettings& s) {  // as common/job/mlt_job.cpp
-  KelemenParams p;
-  p.largeStepProb = s.largeStepProb;
-  p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
-  p.s1 = s.kelemenS1;
-  p.s2 = s.kelemenS2;
-  p.sigma = s.gaussianSigma;
-  return p;
-}
 
 ChainConfig chainConfig(const JobPlan& plan, int k) {  // as runMarkovChain
   const RenderSettings& s = plan.settings;
