@@ -1,6 +1,7 @@
 // Tasks, merging, development and partial EXRs (see merge.h).
 #include "coordinator/merge.h"
 
+#include "common/job/executor.h"
 #include "common/job/image_metadata.h"
 
 #include <algorithm>
@@ -72,13 +73,7 @@ PartialResult emptyPartial(const JobPlan& plan) {
 
 bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, PartialResult& out,
              const std::atomic<bool>* cancel) {
-  out = emptyPartial(plan);
-  for (uint32_t u = range.begin; u < range.end; ++u) {
-    if (cancel && cancel->load()) return false;
-    out.add(runWorkUnit(scene, plan, plan.units.at(u)));
-  }
-  std::sort(out.units.begin(), out.units.end());
-  return true;
+  return runUnits(scene, plan, range.begin, range.end, out, cancel);  // the one executor (common/job/executor.h)
 }
 
 ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const PartialResult& merged) {

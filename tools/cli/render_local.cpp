@@ -1,12 +1,12 @@
 // The in-process renderer (see render_local.h).
 #include "tools/cli/render_local.h"
 
+#include "common/job/executor.h"
 #include "common/job/image_metadata.h"
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
-#include <tbb/parallel_pipeline.h>
 
 #include <algorithm>
 #include <chrono>
@@ -43,27 +43,16 @@ constexpr uint64_t kTrialUnitMutations = 8192;  // a trial unit: this long a pre
 constexpr double kBudgetFill = 0.95;          // share of the remaining budget planned (develop, write, tail)
 constexpr int kMutationsPerPixelDigits = 3;   // the chosen mutations per pixel, rounded down to this many
 
-// Runs items 0, 1, ... (issued in order while next(i) says so) in parallel with run(i) and hands the
-// results to merge(i, result) strictly in issue order, so sums do not depend on the thread count.
+// The one executor (common/job/executor.h): units issued in order while next(i) says so, run in
+// parallel, merged strictly in index order.
 template <class Next, class Run, class Merge>
 void runPipeline(size_t tokens, Next next, Run run, Merge merge) {
-  size_t issued = 0;
-  tbb::parallel_pipeline(
-      tokens,
-      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                     [&](tbb::flow_control& fc) -> size_t {
-                                       if (!next(issued)) {
-                                         fc.stop();
-                                         return 0;
-                                       }
-                                       return issued++;
-                                     }) &
-          tbb::make_filter<size_t, std::pair<size_t, std::shared_ptr<PartialResult>>>(
-              tbb::filter_mode::parallel,
-              [&](size_t i) { return std::make_pair(i, std::make_shared<PartialResult>(run(i))); }) &
-          tbb::make_filter<std::pair<size_t, std::shared_ptr<PartialResult>>, void>(
-              tbb::filter_mode::serial_in_order,
-              [&](const std::pair<size_t, std::shared_ptr<PartialResult>>& r) { merge(r.first, *r.second); }));
+  UnitExecution e;
+  e.parallelism = tokens;
+  e.issue = next;
+  e.run = run;
+  e.merge = [&](size_t i, PartialResult& r) { merge(i, r); };
+  executeUnits(e);
 }
 
 // x rounded down to `digits` significant decimal digits, returned as the double that this decimal reads

@@ -2,7 +2,7 @@
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
-#include <tbb/parallel_pipeline.h>
+#include "common/job/executor.h"
 
 #include <chrono>
 #include <cstdio>
@@ -25,28 +25,17 @@ JobRun runJobInProcess(const RenderScene& scene, const RenderSettings& settings,
   const size_t nUnits = plan.units.size();
   run.unitStats.reserve(nUnits);
   run.unitSamples.reserve(nUnits);
-  size_t next = 0;
-  // Issue units in index order, run them in parallel, merge strictly in index order: the sums (and so
-  // the image's bits) do not depend on the thread count.
-  tbb::parallel_pipeline(
-      size_t(2 * nThreads),
-      tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                     [&](tbb::flow_control& fc) -> size_t {
-                                       if (next >= nUnits) {
-                                         fc.stop();
-                                         return 0;
-                                       }
-                                       return next++;
-                                     }) &
-          tbb::make_filter<size_t, std::shared_ptr<PartialResult>>(
-              tbb::filter_mode::parallel,
-              [&](size_t u) { return std::make_shared<PartialResult>(runWorkUnit(scene, plan, plan.units[u])); }) &
-          tbb::make_filter<std::shared_ptr<PartialResult>, void>(tbb::filter_mode::serial_in_order,
-                                                                 [&](std::shared_ptr<PartialResult> r) {
-                                                                   run.unitStats.push_back(r->stats);
-                                                                   run.unitSamples.push_back(r->samples);
-                                                                   run.merged.add(*r);
-                                                                 }));
+  // The one executor (common/job/executor.h): the sums do not depend on the thread count.
+  UnitExecution e;
+  e.parallelism = size_t(2 * nThreads);
+  e.issue = [&](size_t i) { return i < nUnits; };
+  e.run = [&](size_t i) { return runWorkUnit(scene, plan, plan.units[i]); };
+  e.merge = [&](size_t, PartialResult& r) {
+    run.unitStats.push_back(r.stats);
+    run.unitSamples.push_back(r.samples);
+    run.merged.add(r);
+  };
+  executeUnits(e);
   if (nUnits == 0) throw std::runtime_error("runJobInProcess: the plan has no work units");
   run.image = developImage(plan, run.merged);
   run.seconds = std::chrono::duration<double>(Clock::now() - start).count();

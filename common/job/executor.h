@@ -1,0 +1,33 @@
+// The one executor of work units. The in-process renderer (tools/cli/render_local.cpp), the evaluation
+// harness (tools/eval/job_runner.cpp) and a farm task on a worker (coordinator/merge.cpp runTask) all run
+// units through it:
+//   units are issued in index order 0, 1, 2, ... while issue(i) says so (a time budget or a cancel stops
+//   issuing; a unit in flight always finishes), run with up to `parallelism` in flight, and handed to
+//   merge(i, result) strictly in index order,
+// so the merged sums, and the image's bits, never depend on the thread count or on timing.
+#pragma once
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "common/job/render_job.h"
+
+namespace mlt {
+
+struct UnitExecution {
+  size_t parallelism = 1;                           // units in flight; 1: one after another, this thread
+  std::function<bool(size_t)> issue;                // start unit i? (false: stop issuing)
+  std::function<PartialResult(size_t)> run;         // the unit's result
+  std::function<void(size_t, PartialResult&)> merge;  // called in index order
+};
+
+// Returns the number of units merged (= issued).
+size_t executeUnits(const UnitExecution& e);
+
+// Units [begin, end) of `plan`, one after another, summed in index order into a zero partial of the
+// plan's film size. Returns false (result incomplete) if `cancel` became true between units.
+bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
+              const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace mlt
