@@ -265,22 +265,21 @@ v1::ChainStats toProto(const ChainStats& s) {
   v1::ChainStats p;
   for (uint64_t v : s.proposedPerLength) p.add_proposed_per_length(v);
   for (uint64_t v : s.acceptedPerLength) p.add_accepted_per_length(v);
-  p.set_large_proposed(s.largeProposed);
-  p.set_large_accepted(s.largeAccepted);
-  p.set_small_proposed(s.smallProposed);
-  p.set_small_accepted(s.smallAccepted);
+  for (uint64_t v : s.proposedPerKind) p.add_proposed_per_kind(v);
+  for (uint64_t v : s.acceptedPerKind) p.add_accepted_per_kind(v);
   for (const TargetSums& t : s.largeStepSums) *p.add_large_step_sums() = toProto(t);
   return p;
 }
 
 ChainStats fromProto(const v1::ChainStats& p) {
+  constexpr int kMaxKinds = 64;
   ChainStats s;
   s.proposedPerLength.assign(p.proposed_per_length().begin(), p.proposed_per_length().end());
   s.acceptedPerLength.assign(p.accepted_per_length().begin(), p.accepted_per_length().end());
-  s.largeProposed = p.large_proposed();
-  s.largeAccepted = p.large_accepted();
-  s.smallProposed = p.small_proposed();
-  s.smallAccepted = p.small_accepted();
+  if (p.proposed_per_kind_size() > kMaxKinds || p.accepted_per_kind_size() > kMaxKinds)
+    throw WireError("stats.proposed_per_kind", fmt::format("at most {} mutation kinds", kMaxKinds));
+  s.proposedPerKind.assign(p.proposed_per_kind().begin(), p.proposed_per_kind().end());
+  s.acceptedPerKind.assign(p.accepted_per_kind().begin(), p.accepted_per_kind().end());
   for (const auto& t : p.large_step_sums()) s.largeStepSums.push_back(fromProto(t, "stats.large_step_sums"));
   return s;
 }

@@ -180,7 +180,7 @@ TEST(FarmRpc, FullHdFilmTravelsInChunksUnderTheDefaultMessageLimit) {
   }
   r.samples = 123456789;
   r.units = {3, 4, 5};
-  r.stats.largeProposed = 42;
+  r.stats.proposedPerKind = {42, 7};
   r.stats.largeStepSums = {{}, {}, {}, {42, 1.0 / 3.0, 0.125}};
   const size_t bytes = wire::filmByteSize(1920, 1080, 2);
   ASSERT_GT(bytes, size_t(4) << 20) << "the film must exceed the 4 MiB message limit for this test to mean anything";
@@ -194,7 +194,7 @@ TEST(FarmRpc, FullHdFilmTravelsInChunksUnderTheDefaultMessageLimit) {
   EXPECT_EQ(wire::encodeFilm(handler.received.film), wire::encodeFilm(r.film)) << "film bytes changed in transit";
   EXPECT_EQ(handler.received.samples, r.samples);
   EXPECT_EQ(handler.received.units, r.units);
-  EXPECT_EQ(handler.received.stats.largeProposed, 42u);
+  EXPECT_EQ(handler.received.stats.proposedPerKind, r.stats.proposedPerKind);
   EXPECT_TRUE(handler.received.film.hasSplatLayer(4));
   EXPECT_EQ(handler.received.stats.largeStepSums, r.stats.largeStepSums);
 

@@ -70,9 +70,9 @@ TEST(MltJob, SameUnitGivesIdenticalPartialResult) {
       const PartialResult b = runWorkUnit(cornell(), plan, plan.units[i]);
       EXPECT_TRUE(sameFilm(a.film, b.film)) << methodName(m) << " unit " << i;
       EXPECT_EQ(a.samples, plan.units[i].mutations);
-      EXPECT_EQ(a.stats.largeAccepted, b.stats.largeAccepted);
-      EXPECT_EQ(a.stats.smallAccepted, b.stats.smallAccepted);
-      EXPECT_EQ(a.stats.largeProposed + a.stats.smallProposed, plan.units[i].mutations);
+      EXPECT_EQ(a.stats.acceptedPerKind, b.stats.acceptedPerKind);
+      ASSERT_EQ(a.stats.proposedPerKind.size(), mutationKindNames(m).size());
+      EXPECT_EQ(a.stats.proposedPerKind[0] + a.stats.proposedPerKind[1], plan.units[i].mutations);
     }
   }
 }
@@ -226,8 +226,13 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   EXPECT_NEAR(accepted / double(mutations), r.acceptance, 1e-9);
   EXPECT_GT(r.acceptance, 0.0);
   EXPECT_LT(r.acceptance, 1.0);
-  EXPECT_NEAR(double(merged.stats.largeAccepted + merged.stats.smallAccepted),
-              r.acceptanceLarge * double(r.largeSteps) + r.acceptanceSmall * double(r.smallSteps), 1e-6);
+  ASSERT_EQ(r.kinds.size(), 2u);  // named by the method
+  EXPECT_EQ(r.kinds[0].name, "large");
+  EXPECT_EQ(r.kinds[1].name, "small");
+  EXPECT_NEAR(double(merged.stats.acceptedPerKind[0] + merged.stats.acceptedPerKind[1]),
+              r.acceptanceOf("large") * double(r.steps("large")) + r.acceptanceOf("small") * double(r.steps("small")),
+              1e-6);
+  EXPECT_EQ(r.steps("large") + r.steps("small"), r.mutations);
 
   ImageMetadata m;
   m.strings["method"] = "mmlt";
@@ -246,6 +251,13 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   EXPECT_EQ(back.bStdErr, r.bStdErr);
   EXPECT_EQ(back.bBootstrap, plan.norm.b);
   EXPECT_EQ(back.bSamples, r.bSamples);
+  ASSERT_EQ(back.kinds.size(), r.kinds.size());
+  for (size_t k = 0; k < r.kinds.size(); ++k) {
+    EXPECT_EQ(back.kinds[k].name, r.kinds[k].name);
+    EXPECT_EQ(back.kinds[k].proposed, r.kinds[k].proposed);
+  }
+  EXPECT_EQ(m.strings.at("mutationKinds"), "large,small");
+  EXPECT_TRUE(m.numbers.count("acceptanceLarge") && m.numbers.count("smallSteps"));
   // A relative standard error of b above 2% gets a warning.
   ChainReport vague = r;
   vague.bStdErr = 2 * kMaxRelativeStdErrB * r.b;

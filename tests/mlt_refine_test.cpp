@@ -137,7 +137,8 @@ TEST(RefinedB, LargeStepsSampleTheTargetLikeTheBootstrap) {
       if (5 * se < 0.3 * b.b) ++powerful;
     }
     EXPECT_GE(powerful, m == Method::MMLT ? 3 : 1) << methodName(m) << ": the comparison is too weak to fail";
-    EXPECT_EQ(large, merged.stats.largeProposed) << methodName(m) << ": every large step is counted once";
+    EXPECT_EQ(large, merged.stats.proposedPerKind[int(MutationType::Large)]) << methodName(m)
+                                                                             << ": every large step is counted once";
   }
 }
 
@@ -153,10 +154,10 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
     EXPECT_LT(rs.bStdErr, rs.bBootstrapStdErr) << methodName(m) << ": the large steps add information";
     EXPECT_LT(rb.bStdErr, 0.9 * rs.bStdErr) << methodName(m) << ": " << rb.bStdErr << " vs " << rs.bStdErr;
     if (m == Method::PSSMLT) {  // one length: compare with the large steps' model variance alone
-      const double largeOnly = std::sqrt(big.norm.bootstrapB[0].sampleVar / double(rb.largeSteps));
+      const double largeOnly = std::sqrt(big.norm.bootstrapB[0].sampleVar / double(rb.steps("large")));
       EXPECT_LE(rb.bStdErr, std::min(rb.bBootstrapStdErr, largeOnly));
     }
-    EXPECT_EQ(rb.bSamples, big.norm.bootstrapSamples + rb.largeSteps);
+    EXPECT_EQ(rb.bSamples, big.norm.bootstrapSamples + rb.steps("large"));
   }
 }
 

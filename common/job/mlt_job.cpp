@@ -355,12 +355,13 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
   ChainStats& st = result.stats;
   st.proposedPerLength.assign(slot + 1, 0);
   st.acceptedPerLength.assign(slot + 1, 0);
-  st.proposedPerLength[slot] = counts.proposed[0] + counts.proposed[1];
-  st.acceptedPerLength[slot] = counts.accepted[0] + counts.accepted[1];
-  st.largeProposed = counts.proposed[int(MutationType::Large)];
-  st.largeAccepted = counts.accepted[int(MutationType::Large)];
-  st.smallProposed = counts.proposed[int(MutationType::Small)];
-  st.smallAccepted = counts.accepted[int(MutationType::Small)];
+  const size_t kinds = mutationKindNames(s.method).size();
+  st.proposedPerKind.assign(counts.proposed, counts.proposed + kinds);
+  st.acceptedPerKind.assign(counts.accepted, counts.accepted + kinds);
+  for (size_t kind = 0; kind < kinds; ++kind) {
+    st.proposedPerLength[slot] += counts.proposed[kind];
+    st.acceptedPerLength[slot] += counts.accepted[kind];
+  }
   st.largeStepSums.assign(slot + 1, TargetSums{});
   st.largeStepSums[slot] = counts.largeSteps;
   quantizeSums(st.largeStepSums[slot], s.seed, unit.index, uint64_t(slot));

@@ -32,6 +32,11 @@ Method parseMethod(const std::string& name) {
 
 bool isMarkovChainMethod(Method m) { return m == Method::PSSMLT || m == Method::PSSMLT_BDPT || m == Method::MMLT; }
 
+const std::vector<std::string>& mutationKindNames(Method m) {
+  static const std::vector<std::string> kelemen = {"large", "small"}, none;  // index = MutationType
+  return isMarkovChainMethod(m) ? kelemen : none;
+}
+
 namespace {
 void addVectors(std::vector<uint64_t>& a, const std::vector<uint64_t>& b) {
   if (a.size() < b.size()) a.resize(b.size(), 0);
@@ -42,10 +47,8 @@ void addVectors(std::vector<uint64_t>& a, const std::vector<uint64_t>& b) {
 void ChainStats::add(const ChainStats& o) {
   addVectors(proposedPerLength, o.proposedPerLength);
   addVectors(acceptedPerLength, o.acceptedPerLength);
-  largeProposed += o.largeProposed;
-  largeAccepted += o.largeAccepted;
-  smallProposed += o.smallProposed;
-  smallAccepted += o.smallAccepted;
+  addVectors(proposedPerKind, o.proposedPerKind);
+  addVectors(acceptedPerKind, o.acceptedPerKind);
   addPerSlot(largeStepSums, o.largeStepSums);
 }
 

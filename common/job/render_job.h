@@ -23,6 +23,9 @@ enum class Method { PT, LT, BDPT, PSSMLT, PSSMLT_BDPT, MMLT };
 const char* methodName(Method m);                 // "pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"
 Method parseMethod(const std::string& name);      // throws std::invalid_argument naming the value
 bool isMarkovChainMethod(Method m);
+// The names of a Markov chain method's mutation kinds, index = Proposal::kind (pssmlt, pssmlt-bdpt,
+// mmlt: "large", "small"); empty for the others. Statistics and metadata keys use these names.
+const std::vector<std::string>& mutationKindNames(Method m);
 
 enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s1, s2) or Gaussian (sigma)
 enum class MltSplatting { ExpectedValue, KelemenMIS };
@@ -83,7 +86,7 @@ struct JobPlan {
 
 struct ChainStats {              // sums, so they merge by addition
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;  // index = path length (pssmlt: index 0)
-  uint64_t largeProposed = 0, largeAccepted = 0, smallProposed = 0, smallAccepted = 0;
+  std::vector<uint64_t> proposedPerKind, acceptedPerKind;  // index = mutation kind (mutationKindNames)
   std::vector<TargetSums> largeStepSums;     // c of every large step, per path length slot (quantized per unit)
   void add(const ChainStats& o);
 };

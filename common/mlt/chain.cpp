@@ -30,13 +30,15 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     double ratio = p.tRatio * cy / cx;
     if (config.acceptancePower != 1) ratio = std::pow(ratio, config.acceptancePower);
     const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);
-    const int type = static_cast<int>(p.type);
-    ++counts.proposed[type];
-    if (p.type == MutationType::Large) counts.largeSteps.add(cy);
+    const int kind = p.kind;
+    if (kind < 0 || kind >= kMaxMutationKinds)
+      throw std::invalid_argument("runChain: mutation kind " + std::to_string(kind) + " out of range");
+    ++counts.proposed[kind];
+    if (p.independent) counts.largeSteps.add(cy);
 
     double wy, wx;
     if (mis) {
-      const double large = p.type == MutationType::Large ? 1.0 : 0.0;
+      const double large = p.independent ? 1.0 : 0.0;
       wy = (cy > 0 || large > 0) ? (a + large) / (cy + bPlarge) : 0.0;
       wx = (1 - a) / (cx + bPlarge);
     } else {
@@ -46,7 +48,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     xWeight += wx;
 
     if (a > 0 && acceptRng.uniformDouble() < a) {
-      ++counts.accepted[type];
+      ++counts.accepted[kind];
       if (xWeight > 0) sink.splat(*x, xWeight);
       std::swap(x, y);
       cx = cy;

@@ -34,9 +34,15 @@ namespace mlt {
 
 enum class ChainSplatting { ExpectedValue, KelemenMIS };
 
+// A proposal's kind is an index into its method's mutation kind names (render_job.h mutationKindNames:
+// pssmlt's "large", "small"; later methods name their own), so statistics are kept per kind without a
+// shared enum.
+constexpr int kMaxMutationKinds = 8;
 struct Proposal {
-  MutationType type = MutationType::Small;
-  double tRatio = 1;  // T(y -> x) / T(x -> y) (times |Jacobian| for reversible jumps); 1 for PSS steps
+  int kind = 0;              // in [0, kMaxMutationKinds)
+  double tRatio = 1;         // T(y -> x) / T(x -> y) (times |Jacobian| for reversible jumps); 1 for PSS steps
+  bool independent = false;  // drawn from the uniform density, independently of the state (a large step):
+                             // its c(y) is a sample of b (develop.h (D3)) and Kelemen MIS counts it
 };
 
 // The chain's state. propose() turns the current state into a proposal in place (remembering how to undo
@@ -73,9 +79,9 @@ struct ChainConfig {
 };
 
 struct ChainCounts {
-  uint64_t proposed[2] = {0, 0}, accepted[2] = {0, 0};  // index = MutationType
-  // c(y) of every large-step proposal, accepted or not: independent uniform samples of the target, which
-  // refine b as the job runs (develop.h (D3)).
+  uint64_t proposed[kMaxMutationKinds] = {}, accepted[kMaxMutationKinds] = {};  // index = Proposal::kind
+  // c(y) of every independent proposal (a large step), accepted or not: uniform samples of the target,
+  // which refine b as the job runs (develop.h (D3)).
   TargetSums largeSteps;
 };
 

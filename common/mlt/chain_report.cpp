@@ -25,12 +25,29 @@ int lengthOfKey(const std::string& key, const std::string& prefix) {
   return k;
 }
 
+std::string capitalized(std::string s) {
+  if (!s.empty() && s[0] >= 'a' && s[0] <= 'z') s[0] = char(s[0] - 'a' + 'A');
+  return s;
+}
+
 double number(const ImageMetadata& m, const std::string& key) {
   const auto it = m.numbers.find(key);
   return it == m.numbers.end() ? 0.0 : it->second;
 }
 
 }  // namespace
+
+uint64_t ChainReport::steps(const std::string& kind) const {
+  for (const MutationKindReport& k : kinds)
+    if (k.name == kind) return k.proposed;
+  return 0;
+}
+
+double ChainReport::acceptanceOf(const std::string& kind) const {
+  for (const MutationKindReport& k : kinds)
+    if (k.name == kind) return k.acceptance;
+  return 0;
+}
 
 ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   const RenderSettings& s = plan.settings;
@@ -45,16 +62,23 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.bBootstrap = norm.b;
   r.bBootstrapStdErr = norm.bStdErr;
   r.bootstrapSamples = norm.bootstrapSamples;
-  for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;
+  for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;  // the independent proposals
   r.bSamples += norm.bootstrapSamples;
   r.mutations = merged.samples;
   r.mutationsPerPixel = s.mutationsPerPixel;
   r.hasAcceptance = true;
-  r.largeSteps = merged.stats.largeProposed;
-  r.smallSteps = merged.stats.smallProposed;
-  r.acceptance = ratio(merged.stats.largeAccepted + merged.stats.smallAccepted, r.largeSteps + r.smallSteps);
-  r.acceptanceLarge = ratio(merged.stats.largeAccepted, r.largeSteps);
-  r.acceptanceSmall = ratio(merged.stats.smallAccepted, r.smallSteps);
+  const std::vector<std::string>& names = mutationKindNames(s.method);
+  uint64_t proposed = 0, accepted = 0;
+  for (size_t k = 0; k < names.size(); ++k) {
+    const auto& P = merged.stats.proposedPerKind;
+    const auto& A = merged.stats.acceptedPerKind;
+    MutationKindReport kind{names[k], k < P.size() ? P[k] : 0, 0.0};
+    kind.acceptance = ratio(k < A.size() ? A[k] : 0, kind.proposed);
+    proposed += kind.proposed;
+    accepted += k < A.size() ? A[k] : 0;
+    r.kinds.push_back(kind);
+  }
+  r.acceptance = ratio(accepted, proposed);
 
   // Chains merged, per path length (units of a separateDirect direct pass have no mutations).
   std::vector<uint64_t> chainsPerSlot(std::max<size_t>(norm.mutationsPerLength.size(), 1), 0);
@@ -94,10 +118,13 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["mutations"] = double(r.mutations);
   m.numbers["mutationsPerPixel"] = r.mutationsPerPixel;
   m.numbers["acceptance"] = r.acceptance;
-  m.numbers["acceptanceLarge"] = r.acceptanceLarge;
-  m.numbers["acceptanceSmall"] = r.acceptanceSmall;
-  m.numbers["largeSteps"] = double(r.largeSteps);
-  m.numbers["smallSteps"] = double(r.smallSteps);
+  std::string kindList;
+  for (const MutationKindReport& k : r.kinds) {
+    kindList += (kindList.empty() ? "" : ",") + k.name;
+    m.numbers[k.name + "Steps"] = double(k.proposed);
+    m.numbers["acceptance" + capitalized(k.name)] = k.acceptance;
+  }
+  if (!r.kinds.empty()) m.strings["mutationKinds"] = kindList;
   const RenderSettings& s = r.settings;
   m.numbers["largeStepProb"] = s.largeStepProb;
   m.numbers["separateDirect"] = s.separateDirect ? 1 : 0;
@@ -134,10 +161,15 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.mutationsPerPixel = number(m, "mutationsPerPixel");
   r.hasAcceptance = m.numbers.count("acceptance") > 0;
   r.acceptance = number(m, "acceptance");
-  r.acceptanceLarge = number(m, "acceptanceLarge");
-  r.acceptanceSmall = number(m, "acceptanceSmall");
-  r.largeSteps = uint64_t(number(m, "largeSteps"));
-  r.smallSteps = uint64_t(number(m, "smallSteps"));
+  std::string kindList;
+  if (const auto it = m.strings.find("mutationKinds"); it != m.strings.end()) kindList = it->second;
+  else if (m.numbers.count("largeSteps")) kindList = "large,small";  // images written before the kinds were named
+  for (size_t at = 0; !kindList.empty() && at <= kindList.size();) {
+    const size_t comma = std::min(kindList.find(',', at), kindList.size());
+    const std::string name = kindList.substr(at, comma - at);
+    r.kinds.push_back({name, uint64_t(number(m, name + "Steps")), number(m, "acceptance" + capitalized(name))});
+    at = comma + 1;
+  }
   if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
   r.settings.separateDirect = number(m, "separateDirect") != 0;
   if (const auto it = m.strings.find("kernel"); it != m.strings.end() && it->second == "gaussian") {
@@ -178,9 +210,12 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
       out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>9.1f}%\n", l.k,
                          fmt::format("{:.6g} ± {:.2g}", l.bk, l.bkStdErr), l.chains, l.mutations, 100 * l.acceptance);
   }
-  if (r.hasAcceptance)
-    out += fmt::format("acceptance {:.1f}% (large steps {:.1f}%, small steps {:.1f}%)\n", 100 * r.acceptance,
-                       100 * r.acceptanceLarge, 100 * r.acceptanceSmall);
+  if (r.hasAcceptance) {
+    std::string kinds;
+    for (const MutationKindReport& k : r.kinds)
+      kinds += fmt::format("{}{} steps {:.1f}%", kinds.empty() ? "" : ", ", k.name, 100 * k.acceptance);
+    out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
+  }
   // {} prints the shortest decimal that reads back as the same double: typing it reproduces the image.
   out += fmt::format("{} mutations ({} per pixel, {} chains) in {:.2f} s{} = {:.4g} mutations/s\n", r.mutations,
                      r.mutationsPerPixel, r.chains, chainSeconds, secondsNote,

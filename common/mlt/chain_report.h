@@ -7,10 +7,12 @@
 // Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
 //   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with), bBootstrap,
 //   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
-//   --mutations-per-pixel equal to it reproduces the image), acceptance, acceptanceLarge, acceptanceSmall,
-//   largeSteps, smallSteps, largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
+//   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
+//   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
+//   largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
 //   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
-// Strings: kernel ("kelemen" | "gaussian"), splatting ("expected-value" | "kelemen-mis").
+// Strings: kernel ("kelemen" | "gaussian"), splatting ("expected-value" | "kelemen-mis"), mutationKinds
+// (the kind names, comma-separated).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -32,6 +34,12 @@ struct ChainLengthReport {
   double acceptance = 0;  // accepted / proposed of chains of this length
 };
 
+struct MutationKindReport {
+  std::string name;  // the method's name for it (render_job.h mutationKindNames)
+  uint64_t proposed = 0;
+  double acceptance = 0;
+};
+
 struct ChainReport {
   std::string method;
   double b = 0, bStdErr = 0;                  // as developed: bootstrap + large steps (develop.h (D3))
@@ -41,8 +49,10 @@ struct ChainReport {
   uint64_t chains = 0, mutations = 0;
   double mutationsPerPixel = 0;
   bool hasAcceptance = false;  // false: an image whose metadata does not carry the acceptance keys
-  double acceptance = 0, acceptanceLarge = 0, acceptanceSmall = 0;
-  uint64_t largeSteps = 0, smallSteps = 0;
+  double acceptance = 0;
+  std::vector<MutationKindReport> kinds;   // the method's mutation kinds, index = Proposal::kind
+  uint64_t steps(const std::string& kind) const;        // proposals of that kind (0 if unknown)
+  double acceptanceOf(const std::string& kind) const;   // its acceptance (0 if unknown)
   std::vector<ChainLengthReport> lengths;  // mmlt only, ascending k
   RenderSettings settings;                 // the chain settings recorded with the report (not all of them)
   double relativeStdErr() const { return b > 0 ? bStdErr / b : 0.0; }

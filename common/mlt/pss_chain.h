@@ -11,7 +11,10 @@ namespace mlt {
 class PssState final : public ChainState {
  public:
   explicit PssState(KelemenSource& source) : source_(source) {}
-  Proposal propose() override { return {source_.startIteration(), 1.0}; }  // symmetric kernels: T-ratio 1
+  Proposal propose() override {  // symmetric kernels: T-ratio 1
+    const MutationType t = source_.startIteration();
+    return {int(t), 1.0, t == MutationType::Large};
+  }
   void accept() override { source_.accept(); }
   void reject() override { source_.reject(); }
 

@@ -45,7 +45,7 @@ void runChains(benchmark::State& state, Method m, bool parallel) {
     else for (size_t i = 0; i < n; ++i) parts[i] = runWorkUnit(cornell(), plan, plan.units[i]);
     for (const PartialResult& p : parts) {
       mutations += p.samples;
-      accepted += p.stats.largeAccepted + p.stats.smallAccepted;
+      for (uint64_t a : p.stats.acceptedPerKind) accepted += a;
     }
   }
   state.counters["mutations/s"] = benchmark::Counter(double(mutations), benchmark::Counter::kIsRate);

@@ -152,7 +152,7 @@ class RecordingState final : public ChainState {
   RecordingState(KelemenSource& s, RecordedChain& rec) : inner_(s), rec_(rec) {}
   Proposal propose() override {
     const Proposal p = inner_.propose();
-    rec_.type.push_back(uint8_t(p.type));
+    rec_.type.push_back(uint8_t(p.kind));
     return p;
   }
   void accept() override { rec_.accepted.push_back(1); inner_.accept(); }
@@ -380,7 +380,10 @@ double timeMutation(const MethodData& d) {
 class PlaybackState final : public ChainState {
  public:
   explicit PlaybackState(const RecordedChain& c) : c_(c) {}
-  Proposal propose() override { return {MutationType(c_.type[m_++]), 1.0}; }
+  Proposal propose() override {
+    const int kind = c_.type[m_++];
+    return {kind, 1.0, kind == int(MutationType::Large)};
+  }
   void accept() override {}
   void reject() override {}
 

@@ -96,12 +96,13 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
       if (report.hasAcceptance) {
         auto accepted = [](double rate, uint64_t proposed) { return uint64_t(std::llround(rate * double(proposed))); };
         ChainStats& st = r.stats;
-        st.largeProposed = report.largeSteps;
-        st.largeAccepted = accepted(report.acceptanceLarge, report.largeSteps);
-        st.smallProposed = report.smallSteps;
-        st.smallAccepted = accepted(report.acceptanceSmall, report.smallSteps);
+        uint64_t proposed = 0;
+        for (const MutationKindReport& k : report.kinds) {
+          st.proposedPerKind.push_back(k.proposed);
+          st.acceptedPerKind.push_back(accepted(k.acceptance, k.proposed));
+          proposed += k.proposed;
+        }
         if (report.lengths.empty()) {  // one target over all lengths: index 0 (as ChainStats does)
-          const uint64_t proposed = report.largeSteps + report.smallSteps;
           st.proposedPerLength = {proposed};
           st.acceptedPerLength = {accepted(report.acceptance, proposed)};
         } else {

@@ -108,8 +108,8 @@ uint64_t sum(const std::vector<uint64_t>& v) {
 std::pair<uint64_t, uint64_t> proposedAccepted(const ChainStats& st) {
   uint64_t p = sum(st.proposedPerLength), a = sum(st.acceptedPerLength);
   if (p == 0) {
-    p = st.largeProposed + st.smallProposed;
-    a = st.largeAccepted + st.smallAccepted;
+    p = sum(st.proposedPerKind);
+    a = sum(st.acceptedPerKind);
   }
   return {p, a};
 }
