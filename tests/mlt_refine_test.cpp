@@ -222,8 +222,8 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   const size_t L = chainPathLengths(s).size();
   const uint64_t n = bootstrapPerLength(s);
   EXPECT_LE(double(n * L), kBootstrapShare * M);
-  EXPECT_GT(double(n * L), 0.5 * kBootstrapShare * M);  // the largest power of two that fits
-  EXPECT_EQ(n & (n - 1), 0u);
+  EXPECT_GT(double(n * L), 0.99 * kBootstrapShare * M);  // all of it, in whole randomization groups
+  EXPECT_EQ(n % (4 * kCandidateGroups), 0u);
   s.mutationsPerPixel = 1;  // a tiny job still gets enough candidates to find its lengths
   EXPECT_EQ(bootstrapPerLength(s), kMinBootstrapPerLength);
   s.mutationsPerPixel = 1e6;

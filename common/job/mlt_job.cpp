@@ -73,9 +73,9 @@ uint64_t bootstrapPerLengthFor(const RenderSettings& s, double candidatesAfforda
   if (s.bootstrapSamples > 0) return uint64_t(s.bootstrapSamples);
   const double lengths = double(std::max<size_t>(chainPathLengths(s).size(), 1));
   const double perLength = candidatesAffordable / lengths;
-  uint64_t n = kMinBootstrapPerLength;
-  while (n < kMaxBootstrapPerLength && double(2 * n) <= perLength) n *= 2;  // largest power of two that fits
-  return n;
+  // A multiple of 64: whole randomization groups, also for a quarter of it (budgeted sizing below).
+  const double n = std::floor(std::min(perLength, double(kMaxBootstrapPerLength)) / 64) * 64;
+  return std::max(kMinBootstrapPerLength, uint64_t(n));
 }
 
 uint64_t bootstrapPerLength(const RenderSettings& s) {

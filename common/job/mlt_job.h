@@ -27,7 +27,7 @@ struct MarkovChainBootstrap {
 // Its candidates spread their film positions evenly (sample_source.h), which makes one candidate worth
 // ~30 large steps for b on a scene with a visible light: so it gets kBootstrapShare of the mutations (a
 // candidate costs about what a mutation costs), spread evenly over the path lengths and rounded down to
-// a power of two, at least kMinBootstrapPerLength per length (a length whose candidates all miss gets no
+// a multiple of 64, at least kMinBootstrapPerLength per length (a length whose candidates all miss gets no
 // chains) and at most kMaxBootstrapPerLength. With several lengths (mmlt) that is the average: each
 // starts with a quarter and the rest goes, by doublings, to the lengths whose b_k is least certain per
 // candidate (bootstrap.h, totalCandidates). Measured cost: 2-4% of the job (README).
