@@ -232,8 +232,12 @@ TEST_F(Cli, EvalRunsThroughTheFarm) {
   const fs::path dir = tempDir() / "eval-farm";
   const RunResult r = run("eval --scenes " + kScenes + "furnace-sphere.xml --methods pt,pssmlt --runs 2 "
                           "--equal-samples --budgets 2 --width 16 --height 16 --ref-spp 16 --bootstrap 2000 "
-                          "--no-ref-cache --farm -o " + dir.string());
+                          "--no-ref-cache --kernel gaussian --sigma 0.02 --farm -o " + dir.string());
   ASSERT_EQ(r.exitCode, 0) << r.output;
+  // The kernel options reach the farm's render: its last EXR (a pssmlt run) records them.
+  const ExrImage last = readExr((dir / "farm-tmp" / "farm-run.exr").string());
+  EXPECT_EQ(last.metadata.strings.at("kernel"), "gaussian");
+  EXPECT_EQ(float(last.metadata.numbers.at("kernelSigma")), 0.02f);
   std::ifstream csv(dir / "runs.csv");
   std::string line;
   std::getline(csv, line);  // header
@@ -253,6 +257,50 @@ TEST_F(Cli, EvalRunsThroughTheFarm) {
     }
   }
   EXPECT_EQ(rows, 2 * 2);
+}
+
+// `mltfarm eval`'s chain options reach every run and the reproduction command line: the runs' seeds do
+// not depend on them and images are pure functions of settings and seed, so the same runs with another
+// kernel (or large-step probability, or s2) have other errors, and the defaults given explicitly the same.
+TEST_F(Cli, EvalChainOptionsReachTheRunsAndTheCommandLine) {
+  auto evalRelMse = [](const std::string& name, const std::string& options) {
+    const fs::path dir = tempDir() / ("eval-" + name);
+    const RunResult r = run("eval --scenes " + kScenes + "furnace-sphere.xml --methods pssmlt --runs 1 "
+                            "--equal-samples --budgets 1 --width 8 --height 8 --ref-spp 8 --bootstrap 500 "
+                            "--no-maps --no-charts -q -t 1 " + options + " -o " + dir.string());
+    EXPECT_EQ(r.exitCode, 0) << options << "\n" << r.output;
+    std::ifstream csv(dir / "runs.csv");
+    std::string line;
+    std::getline(csv, line);  // header
+    std::getline(csv, line);
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    EXPECT_GT(f.size(), 10u) << line;
+    std::ifstream md(dir / "summary.md");
+    const std::string summary((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+    return std::make_pair(f.size() > 10 ? f[10] : std::string(), summary);
+  };
+  const auto base = evalRelMse("default", "");
+  const auto explicitDefaults = evalRelMse("explicit", "--kernel kelemen --s1 0.0009765625 --s2 0.015625 --large-step 0.3");
+  const auto gaussian = evalRelMse("gaussian", "--kernel gaussian --sigma 0.2");
+  const auto s2 = evalRelMse("s2", "--s2 0.25");
+  const auto largeStep = evalRelMse("large-step", "--large-step 0.7");
+  EXPECT_EQ(base.first, explicitDefaults.first);
+  EXPECT_NE(base.first, gaussian.first);
+  EXPECT_NE(base.first, s2.first);
+  EXPECT_NE(base.first, largeStep.first);
+  EXPECT_NE(gaussian.second.find("--kernel gaussian --sigma 0.2"), std::string::npos) << gaussian.second;
+  EXPECT_NE(s2.second.find("--kernel kelemen --s1 0.0009765625 --s2 0.25"), std::string::npos) << s2.second;
+  EXPECT_NE(largeStep.second.find("--large-step 0.7"), std::string::npos) << largeStep.second;
+  // Validated like render's: a step outside (0, 1], s2 below s1.
+  for (const char* bad : {"--sigma 0", "--s1 1.5", "--s1 0.1 --s2 0.05", "--kernel nonsense"}) {
+    const RunResult r = run("eval --scenes " + kScenes + "furnace-sphere.xml --methods pssmlt -o /tmp/unused " + bad);
+    EXPECT_NE(r.exitCode, 0) << bad << "\n" << r.output;
+    const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));
+    EXPECT_NE(r.output.find(option == "--s1" && std::string(bad).find("--s2") != std::string::npos ? "--s2" : option),
+              std::string::npos) << bad << "\n" << r.output;
+  }
 }
 
 }  // namespace

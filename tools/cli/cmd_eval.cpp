@@ -30,6 +30,8 @@ struct EvalCliOptions {
   int runs = 3, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0, refSpp = 1024, refParts = 4;
   int chains = 0, bootstrap = 0;
   float largeStep = 0.3f;
+  std::string kernel = "kelemen";
+  float s1 = 1.0f / 1024, s2 = 1.0f / 64, sigma = 0.01f;  // RenderSettings' defaults (see settings_options.h)
   double eps = 1e-2, outlierRatio = 4, biasAlpha = 1e-3, minBias = 0.01;
   uint64_t seed = 1;
   bool equalSamples = false, farm = false, noCharts = false, noMaps = false, noCache = false, quiet = false;
@@ -66,8 +68,11 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
         shellQuote(self), shellQuote(std::filesystem::absolute(scene.desc.sourceFile).string()), shellQuote(exr), methodName(s.method), s.seed, s.width,
         s.height, s.integrator.maxDepth, s.integrator.rrDepth);
     if (isMarkovChainMethod(s.method))
-      cmd += fmt::format(" --mutations-per-pixel {:.17g} --bootstrap {} --large-step {} --chains {}", s.mutationsPerPixel,
-                         s.bootstrapSamples, s.largeStepProb, s.chains);
+      cmd += fmt::format(
+          " --mutations-per-pixel {:.17g} --bootstrap {} --large-step {} --chains {} --kernel {} --s1 {} "
+          "--s2 {} --sigma {}",
+          s.mutationsPerPixel, s.bootstrapSamples, s.largeStepProb, s.chains,
+          s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen", s.kelemenS1, s.kelemenS2, s.gaussianSigma);
     else
       cmd += fmt::format(" --spp {}", s.spp);
     if (threads > 0) cmd += fmt::format(" --threads {}", threads);
@@ -179,6 +184,21 @@ CommandRun setupEval(CLI::App& sub) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   sub.add_option("--large-step", o->largeStep, "Large-step probability")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--kernel", o->kernel,
+                 "Markov chain methods: small-step kernel, kelemen (exponential, --s1/--s2) or gaussian (--sigma)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"kelemen", "gaussian"}));
+  // Same validation as `mltfarm render` (settings_options.cpp): steps in (0, 1], s1 <= s2 checked below.
+  const CLI::Validator unitStep(
+      [](std::string& value) -> std::string {
+        double x = 0;
+        if (!CLI::detail::lexical_cast(value, x)) return "'" + value + "' is not a number";
+        return x > 0 && x <= 1 ? std::string() : "must be in (0, 1], got " + value;
+      },
+      "(0,1]", "UNIT_STEP");
+  sub.add_option("--s1", o->s1, "Kelemen kernel: smallest step")->check(unitStep);
+  sub.add_option("--s2", o->s2, "Kelemen kernel: largest step (at least --s1)")->check(unitStep);
+  sub.add_option("--sigma", o->sigma, "Gaussian kernel: standard deviation")->check(unitStep);
   sub.add_option("--eps", o->eps, "relMSE epsilon: (x-r)^2 / (r^2 + eps)")->capture_default_str()->check(CLI::PositiveNumber);
   sub.add_option("--seed", o->seed, "Base seed (run seeds derive from it)")->capture_default_str();
   sub.add_option("-t,--threads", o->threads, "Threads per run (default: every core)")->check(CLI::NonNegativeNumber);
@@ -195,6 +215,8 @@ CommandRun setupEval(CLI::App& sub) {
   sub.add_flag("-q,--quiet", o->quiet, "No progress lines");
 
   return [o, maxDepth, rrDepth]() -> int {
+    if (o->s2 < o->s1)  // the kernel's steps lie in [s1, s2] (Kelemen et al. 2002, eq. 9)
+      throw std::invalid_argument(fmt::format("--s2 ({}) must be at least --s1 ({})", o->s2, o->s1));
     eval::EvalConfig cfg;
     std::map<std::string, std::string> defines;
     for (const std::string& d : o->defines) {
@@ -229,6 +251,10 @@ CommandRun setupEval(CLI::App& sub) {
     cfg.base.chains = o->chains;
     cfg.base.bootstrapSamples = o->bootstrap;
     cfg.base.largeStepProb = o->largeStep;
+    cfg.base.kernel = o->kernel == "gaussian" ? MutationKernel::Gaussian : MutationKernel::Kelemen;
+    cfg.base.kelemenS1 = o->s1;
+    cfg.base.kelemenS2 = o->s2;
+    cfg.base.gaussianSigma = o->sigma;
     cfg.eps = o->eps;
     cfg.seed = o->seed;
     cfg.threads = o->threads;
@@ -248,11 +274,19 @@ CommandRun setupEval(CLI::App& sub) {
       };
       std::string budgets;
       for (double b : o->budgets) budgets += (budgets.empty() ? "" : ",") + fmt::format("{:g}", b);
-      cfg.commandLine = fmt::format("mltfarm eval --scenes {} --methods {} --runs {} --budgets {}{}{} --out {}",
+      // The Markov chain parameters always (their defaults may change); the others when given.
+      std::string chain = fmt::format(" --large-step {} --kernel {}", o->largeStep, o->kernel);
+      if (o->kernel == "gaussian")
+        chain += fmt::format(" --sigma {}", o->sigma);
+      else
+        chain += fmt::format(" --s1 {} --s2 {}", o->s1, o->s2);
+      if (o->chains > 0) chain += fmt::format(" --chains {}", o->chains);
+      if (o->bootstrap > 0) chain += fmt::format(" --bootstrap {}", o->bootstrap);
+      cfg.commandLine = fmt::format("mltfarm eval --scenes {} --methods {} --runs {} --budgets {}{}{}{} --out {}",
                                     join(splitCommas(o->scenes)), join(splitCommas(o->methods)), o->runs, budgets,
                                     o->equalSamples ? " --equal-samples" : "",
                                     o->width > 0 ? fmt::format(" --width {} --height {}", o->width, o->height) : "",
-                                    o->out);
+                                    chain, o->out);
     }
     if (o->farm) cfg.farm = makeFarmRunner(defines, o->threads, o->out + "/farm-tmp");
     if (o->quiet) spdlog::set_level(spdlog::level::warn);
