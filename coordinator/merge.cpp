@@ -65,12 +65,6 @@ std::vector<TaskRange> splitTasks(const JobPlan& plan) {
   return tasks;
 }
 
-PartialResult emptyPartial(const JobPlan& plan) {
-  PartialResult r;
-  r.film = Film(plan.settings.width, plan.settings.height);
-  return r;
-}
-
 bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, PartialResult& out,
              const std::atomic<bool>* cancel) {
   return runUnits(scene, plan, range.begin, range.end, out, cancel);  // the one executor (common/job/executor.h)

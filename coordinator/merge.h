@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/io/exr_io.h"
+#include "common/job/executor.h"  // emptyPartial, runUnits
 #include "common/job/render_job.h"
 
 namespace mlt::farm {
@@ -27,8 +28,6 @@ struct TaskRange {
 // ~512 MiB.
 std::vector<TaskRange> splitTasks(const JobPlan& plan);
 
-// A zero partial result with the plan's film size.
-PartialResult emptyPartial(const JobPlan& plan);
 
 // Runs units [range.begin, range.end) in order, summing into a zero partial. Returns false (result
 // incomplete) if `cancel` becomes true between units.

@@ -288,17 +288,10 @@ size_t filmByteSize(int width, int height, size_t splatLayers) {
   return size_t(width) * size_t(height) * (4 + 3 * splatLayers) * sizeof(double);
 }
 
-std::vector<uint32_t> splatLayersOf(const Film& film) {
-  std::vector<uint32_t> layers = {0};
-  for (size_t l = 1; l < film.splatLayerCount(); ++l)
-    if (film.hasSplatLayer(l)) layers.push_back(uint32_t(l));
-  return layers;
-}
-
 std::string encodeFilm(const Film& film) {
   static_assert(sizeof(RGBd) == 3 * sizeof(double));
   const size_t n = film.pixelCount();
-  const std::vector<uint32_t> layers = splatLayersOf(film);
+  const std::vector<uint32_t> layers = film.splatLayers();
   std::string out(filmByteSize(film.width(), film.height(), layers.size()), '\0');
   char* dst = out.data();
   if (n) {
@@ -352,7 +345,7 @@ v1::PartialHeader partialHeader(const PartialResult& r) {
   for (uint32_t u : r.units) h.add_units(u);
   h.set_seconds(r.seconds);
   h.set_non_finite(r.film.nonFiniteSamples());
-  const std::vector<uint32_t> layers = splatLayersOf(r.film);
+  const std::vector<uint32_t> layers = r.film.splatLayers();
   for (uint32_t l : layers) h.add_splat_layers(l);
   h.set_film_bytes(filmByteSize(r.film.width(), r.film.height(), layers.size()));
   return h;
@@ -384,7 +377,7 @@ PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film) 
   if (h.width() != film.width() || h.height() != film.height())
     throw WireError("partial.width", fmt::format("header says {}x{}, the film is {}x{}", h.width(), h.height(),
                                                  film.width(), film.height()));
-  if (headerLayers(h) != splatLayersOf(film))
+  if (headerLayers(h) != film.splatLayers())
     throw WireError("partial.splat_layers", "the header's splat layers differ from the film's");
   PartialResult r;
   r.film = std::move(film);

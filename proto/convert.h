@@ -61,10 +61,9 @@ ChainStats fromProto(const v1::ChainStats& p);
 // A PartialResult travels as a header (everything but the raw sums) + the film's raw bytes.
 v1::PartialHeader partialHeader(const PartialResult& r);
 // Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), then the sums of every
-// allocated splat layer in ascending order (3/pixel each; splatLayersOf lists them, layer 0 always),
+// allocated splat layer in ascending order (3/pixel each; Film::splatLayers lists them, layer 0 always),
 // little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
 inline constexpr uint32_t kMaxSplatLayer = 1026;  // 1 + path length slot; max depth is at most 1024
-std::vector<uint32_t> splatLayersOf(const Film& film);
 std::string encodeFilm(const Film& film);
 Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
                 const std::vector<uint32_t>& layers = {0});

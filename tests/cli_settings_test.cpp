@@ -67,16 +67,7 @@ CommandLineSettings parseSubmit(const std::vector<std::string>& settingsArgs) {
 }
 
 // Settings as the farm receives them: every wire field, the "given" flags and the defines.
-v1::RenderSettings onTheWire(const CommandLineSettings& s) {
-  wire::SubmittedSettings w;
-  w.settings = s.settings;
-  w.hasSize = s.hasSize;
-  w.hasSpp = s.hasSpp;
-  w.hasMaxDepth = s.hasMaxDepth;
-  w.hasRrDepth = s.hasRrDepth;
-  w.defines = s.defines;
-  return wire::toProto(w);
-}
+v1::RenderSettings onTheWire(const CommandLineSettings& s) { return wire::toProto(submittedSettings(s)); }
 
 void expectSame(const CommandLineSettings& a, const CommandLineSettings& b) {
   std::string diff;

@@ -36,6 +36,13 @@ std::vector<RGBd>& Film::splatLayer(size_t layer) {
   return splat_[layer];
 }
 
+std::vector<uint32_t> Film::splatLayers() const {
+  std::vector<uint32_t> layers = {0};
+  for (size_t l = 1; l < splat_.size(); ++l)
+    if (hasSplatLayer(l)) layers.push_back(uint32_t(l));
+  return layers;
+}
+
 const std::vector<RGBd>& Film::splatLayer(size_t layer) const {
   if (!hasSplatLayer(layer)) throw std::out_of_range("Film: no splat layer " + std::to_string(layer));
   return splat_[layer];

@@ -57,6 +57,7 @@ class Film {
   // Splat layers: layers [0, splatLayerCount()) exist as slots; hasSplatLayer tells which hold a buffer.
   size_t splatLayerCount() const { return splat_.size(); }
   bool hasSplatLayer(size_t layer) const { return layer < splat_.size() && !splat_[layer].empty(); }
+  std::vector<uint32_t> splatLayers() const;  // the layers that hold a buffer, ascending (0 always first)
   std::vector<RGBd>& splatLayer(size_t layer);  // allocates a zero layer if absent
   const std::vector<RGBd>& splatLayer(size_t layer) const;  // throws std::out_of_range if absent
 

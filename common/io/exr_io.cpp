@@ -188,25 +188,18 @@ struct DoubleField {
   int layer;      // -2: pixel sums, -1: counts, >= 0: splat layer
 };
 
-std::vector<DoubleField> filmFields(const std::vector<size_t>& layers) {
+std::vector<DoubleField> filmFields(const std::vector<uint32_t>& layers) {
   std::vector<DoubleField> fields = {{"pixel.R", 0, 3, -2}, {"pixel.G", 1, 3, -2}, {"pixel.B", 2, 3, -2}, {"count", 0, 1, -1}};
-  for (size_t l : layers) {
+  for (uint32_t l : layers) {
     const std::string base = l == 0 ? "splat" : "splat" + std::to_string(l);
     for (size_t c = 0; c < 3; ++c) fields.push_back({base + "." + "RGB"[c], c, 3, int(l)});
   }
   return fields;
 }
 
-std::vector<size_t> allocatedLayers(const Film& film) {
-  std::vector<size_t> layers = {0};
-  for (size_t l = 1; l < film.splatLayerCount(); ++l)
-    if (film.hasSplatLayer(l)) layers.push_back(l);
-  return layers;
-}
-
 // The splat layers a partial film EXR holds, from its channel names ("splat<l>.R.hi"; layer 0 is "splat").
-std::vector<size_t> layersInHeader(const std::string& path, const Imf::Header& header) {
-  std::vector<size_t> layers = {0};
+std::vector<uint32_t> layersInHeader(const std::string& path, const Imf::Header& header) {
+  std::vector<uint32_t> layers = {0};
   for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
     const std::string name = it.name();
     const std::string prefix = "splat", suffix = ".R.hi";
@@ -217,7 +210,7 @@ std::vector<size_t> layersInHeader(const std::string& path, const Imf::Header& h
     if (digits.empty() || digits.size() > 4 || digits.find_first_not_of("0123456789") != std::string::npos ||
         digits[0] == '0')
       fail(path, "unexpected channel " + name);
-    layers.push_back(size_t(std::stoul(digits)));
+    layers.push_back(uint32_t(std::stoul(digits)));
   }
   std::sort(layers.begin(), layers.end());
   return layers;
@@ -260,7 +253,7 @@ void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata
   writeFloatRgb(header, fb, preview, width);
 
   // hi/lo words of every double, one plane per channel.
-  const std::vector<DoubleField> fields = filmFields(allocatedLayers(film));
+  const std::vector<DoubleField> fields = filmFields(film.splatLayers());
   std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
   for (size_t f = 0; f < fields.size(); ++f) {
     const double* data = fieldData(film, fields[f]);

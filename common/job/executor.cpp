@@ -39,13 +39,18 @@ size_t executeUnits(const UnitExecution& e) {
   return merged;
 }
 
+PartialResult emptyPartial(const JobPlan& plan) {
+  PartialResult r;
+  r.film = Film(plan.settings.width, plan.settings.height);
+  return r;
+}
+
 bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
               const std::atomic<bool>* cancel) {
   if (begin > end || end > plan.units.size())
     throw std::invalid_argument("runUnits: units [" + std::to_string(begin) + ", " + std::to_string(end) +
                                 ") outside the plan's " + std::to_string(plan.units.size()));
-  out = PartialResult{};
-  out.film = Film(plan.settings.width, plan.settings.height);
+  out = emptyPartial(plan);
   UnitExecution e;
   e.issue = [&](size_t i) { return begin + i < end && !(cancel && cancel->load()); };
   e.run = [&](size_t i) { return runWorkUnit(scene, plan, plan.units[begin + i]); };

@@ -25,6 +25,9 @@ struct UnitExecution {
 // Returns the number of units merged (= issued).
 size_t executeUnits(const UnitExecution& e);
 
+// A zero partial result with the plan's film size (what units are summed into).
+PartialResult emptyPartial(const JobPlan& plan);
+
 // Units [begin, end) of `plan`, one after another, summed in index order into a zero partial of the
 // plan's film size. Returns false (result incomplete) if `cancel` became true between units.
 bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,

@@ -102,7 +102,6 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
 
 namespace {
 
-std::vector<int> chainLengths(const RenderSettings& s) { return chainPathLengths(s); }
 
 
 // Settings of the direct-illumination pass (separateDirect): bdpt limited to kDirectMaxSegments.
@@ -147,7 +146,7 @@ void validateMarkovChainSettings(const RenderSettings& s) {
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
   if (s.separateDirect && s.method == Method::PSSMLT)
     throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
-  chainLengths(s);  // mmlt: a valid max depth
+  chainPathLengths(s);  // mmlt: a valid max depth
 }
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
@@ -157,7 +156,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   MarkovChainBootstrap out;
   out.settings = s;
   out.settings.bootstrapSamples = int(bootstrapPerLength(s));
-  const std::vector<int> lengths = chainLengths(s);
+  const std::vector<int> lengths = chainPathLengths(s);
   if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);

@@ -75,40 +75,43 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
     result.lengths.push_back(std::move(lb));
     reduce(l);
   }
-  // Sizing: while b = sum b_k is not known to the target, double the length that contributes most to its
-  // variance (lowest index on ties). Once that length is at its cap, stop: growing lengths whose variance
-  // is smaller cannot bring the total under the target as fast as it costs (the summary warns instead).
-  while (config.totalCandidates > 0) {  // budgeted sizing
-    uint64_t total = 0;
-    size_t best = 0;
-    for (size_t l = 0; l < result.lengths.size(); ++l) {
-      total += result.lengths[l].c.size();
-      if (varMean[l] / double(result.lengths[l].c.size()) >
-          varMean[best] / double(result.lengths[best].c.size()))
-        best = l;
+  if (config.totalCandidates > 0) {
+    // Budgeted sizing: double the length whose doubling removes most of b's variance per candidate
+    // (largest se_k^2 / n_k; lowest index on ties) while the total stays within the budget.
+    for (;;) {
+      uint64_t total = 0;
+      size_t best = 0;
+      for (size_t l = 0; l < result.lengths.size(); ++l) {
+        total += result.lengths[l].c.size();
+        if (varMean[l] / double(result.lengths[l].c.size()) > varMean[best] / double(result.lengths[best].c.size()))
+          best = l;
+      }
+      LengthBootstrap& lb = result.lengths[best];
+      const uint64_t n = lb.c.size();
+      if (!(varMean[best] > 0) || total + n > config.totalCandidates) break;
+      evaluate(lb, n, 2 * n);
+      reduce(best);
     }
-    LengthBootstrap& lb = result.lengths[best];
-    const uint64_t n = lb.c.size();
-    if (!(varMean[best] > 0) || total + n > config.totalCandidates) break;
-    evaluate(lb, n, 2 * n);
-    reduce(best);
-  }
-  for (;;) {
-    if (config.totalCandidates > 0) break;
-    double b = 0, var = 0;
-    for (size_t l = 0; l < result.lengths.size(); ++l) {
-      b += result.lengths[l].b;
-      var += varMean[l];
+  } else {
+    // Sizing to a target: while b = sum b_k is not known to it, double the length that contributes most
+    // to its variance (lowest index on ties). Once that length is at its cap, stop: growing lengths whose
+    // variance is smaller cannot bring the total under the target as fast as it costs.
+    for (;;) {
+      double b = 0, var = 0;
+      for (size_t l = 0; l < result.lengths.size(); ++l) {
+        b += result.lengths[l].b;
+        var += varMean[l];
+      }
+      if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
+      size_t worst = 0;
+      for (size_t l = 1; l < result.lengths.size(); ++l)
+        if (varMean[l] > varMean[worst]) worst = l;
+      if (result.lengths[worst].c.size() >= maxN) break;
+      LengthBootstrap& lb = result.lengths[worst];
+      const uint64_t n = lb.c.size();
+      evaluate(lb, n, std::min(maxN, 2 * n));
+      reduce(worst);
     }
-    if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
-    size_t worst = 0;
-    for (size_t l = 1; l < result.lengths.size(); ++l)
-      if (varMean[l] > varMean[worst]) worst = l;
-    if (result.lengths[worst].c.size() >= maxN) break;
-    LengthBootstrap& lb = result.lengths[worst];
-    const uint64_t n = lb.c.size();
-    evaluate(lb, n, std::min(maxN, 2 * n));
-    reduce(worst);
   }
   double var = 0;
   for (size_t l = 0; l < result.lengths.size(); ++l) {

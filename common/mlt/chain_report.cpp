@@ -227,7 +227,7 @@ std::string chainWarnings(const ChainReport& r) {
   if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
   return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
                      "as uncertain: render more mutations (b is refined by every large step: now {} samples) or raise "
-                     "--large-step-prob\n",
+                     "--large-step\n",
                      100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, r.bSamples);
 }
 

@@ -39,6 +39,7 @@ class EvaluatorTarget final : public ChainTarget {
 class FilmSink final : public ChainSink {
  public:
   explicit FilmSink(Film& film, size_t layer = 0) : film_(film), layer_(layer) {}
+  FilmSink(Film&, double) = delete;  // the sink takes a layer, not a weight scale (scales apply at develop)
   void splat(const PathContribution& path, double weight) override {
     const float w = static_cast<float>(weight);
     for (const Splat& s : path.splats) film_.addSplat(s.pRaster, s.L * w, layer_);

@@ -220,7 +220,7 @@ RecordedChain record(const JobPlan& plan, const WorkUnit& unit, uint64_t mutatio
   RecordingState state(source, rec);
   RecordingTarget chainTarget(target, recSource, unit.pathLength, rec);
   Film film(s.width, s.height);
-  FilmSink sink(film, 1.0);
+  FilmSink sink(film, chainLayer(size_t(std::max(unit.pathLength, 0))));  // as the job splats
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts =
       runChain(state, chainTarget, chainConfig(plan, std::max(unit.pathLength, 0)), sink, acceptRng, mutations,
@@ -277,7 +277,7 @@ double timeTotal(const MethodData& d) {
     PssState state(source);
     MethodChainTarget chainTarget(target, source, c.unit.pathLength);
     Film film(s.width, s.height);
-    FilmSink sink(film, 1.0);
+    FilmSink sink(film, chainLayer(size_t(std::max(c.unit.pathLength, 0))));  // as the job splats
     Pcg32 acceptRng = chainRng(s.seed, c.unit.index, 1);
     const ChainConfig config = chainConfig(d.plan, std::max(c.unit.pathLength, 0));
     const auto t0 = Clock::now();
@@ -418,7 +418,7 @@ double timeChain(const MethodData& d, bool filmSink) {
     PlaybackState state(c);
     PlaybackTarget target(c);
     Film film(s.width, s.height);
-    FilmSink fsink(film, 1.0);
+    FilmSink fsink(film, chainLayer(size_t(std::max(c.unit.pathLength, 0))));  // as the job splats
     NullSink nsink;
     ChainSink& sink = filmSink ? static_cast<ChainSink&>(fsink) : nsink;
     Pcg32 acceptRng = chainRng(s.seed, c.unit.index, 1);

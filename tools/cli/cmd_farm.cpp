@@ -76,14 +76,7 @@ CommandRun setupSubmit(CLI::App& sub) {
   sub.add_option("-o,--output", o->out, "With --watch: fetch the EXR here when done");
   sub.add_option("--png", o->png, "With --watch: fetch the PNG here when done");
   return [o, settings]() -> int {
-    const CommandLineSettings given = settings->settings();
-    wire::SubmittedSettings s;
-    s.settings = given.settings;
-    s.hasSize = given.hasSize;
-    s.hasSpp = given.hasSpp;
-    s.hasMaxDepth = given.hasMaxDepth;
-    s.hasRrDepth = given.hasRrDepth;
-    s.defines = given.defines;
+    const wire::SubmittedSettings s = submittedSettings(settings->settings());
     FarmClient client(o->conn.channel);
     JobStatus st = client.submit(o->scene, s, o->priority, o->name, o->path);
     std::printf("%s\n", st.jobId.c_str());

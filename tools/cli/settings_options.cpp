@@ -2,6 +2,8 @@
 // `mltfarm render` always had; `submit` inherits them.
 #include "tools/cli/settings_options.h"
 
+#include "proto/convert.h"
+
 #include <fmt/format.h>
 
 #include <stdexcept>
@@ -121,6 +123,17 @@ const RenderSettingsOptions* findRenderSettingsOptions(const CLI::App& app) {
   for (const CLI::App* group : app.get_subcommands([](const CLI::App* sub) { return sub->get_name().empty(); }))
     if (const auto* options = dynamic_cast<const RenderSettingsOptions*>(group)) return options;
   return nullptr;
+}
+
+wire::SubmittedSettings submittedSettings(const CommandLineSettings& s) {
+  wire::SubmittedSettings w;
+  w.settings = s.settings;
+  w.hasSize = s.hasSize;
+  w.hasSpp = s.hasSpp;
+  w.hasMaxDepth = s.hasMaxDepth;
+  w.hasRrDepth = s.hasRrDepth;
+  w.defines = s.defines;
+  return w;
 }
 
 }  // namespace mlt::cli

@@ -19,6 +19,10 @@
 
 #include "common/job/render_job.h"
 
+namespace mlt::wire {
+struct SubmittedSettings;  // proto/convert.h
+}  // namespace mlt::wire
+
 namespace mlt::cli {
 
 // The settings as typed: RenderSettings with the built-in defaults where an option was not given, and
@@ -59,5 +63,8 @@ RenderSettingsOptions& addRenderSettingsOptions(CLI::App& app);
 
 // The group added to `app` by addRenderSettingsOptions; nullptr if it has none.
 const RenderSettingsOptions* findRenderSettingsOptions(const CLI::App& app);
+
+// The settings as `submit` sends them (proto/convert.h): every setting, which ones were given, the defines.
+wire::SubmittedSettings submittedSettings(const CommandLineSettings& s);
 
 }  // namespace mlt::cli
