@@ -4,6 +4,7 @@
 
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -23,6 +24,12 @@ class Conductor final : public Bsdf {
     s.pdfW = s.pdfRevW = 1;
     s.delta = true;
     return s;
+  }
+  // Inverse: a single Dirac lobe reads no numbers: uComponent = gamma.pick, uDir = gamma.fill, Jacobian 1.
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery&) const override {
+    if (wo.z <= 0 || !sameDeltaDirection(wi, reflectZ(wo))) return std::nullopt;
+    return BsdfSampleInverse{clampPrimary(gamma.pick), gamma.fill, 1.0f};
   }
   bool isDelta() const override { return true; }
   Color albedo(const Vec2&) const override { return specR_ * fresnel(1); }

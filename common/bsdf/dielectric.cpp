@@ -4,6 +4,7 @@
 
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -43,6 +44,18 @@ class Dielectric final : public Bsdf {
     s.pdfRevW = 1 - fresnelDielectric(s.wi.z, eta_);
     s.eta = etaCross;
     return s;
+  }
+  // Inverse: wi decides the lobe (reflection and refraction never share a direction); uComponent is put
+  // in the lobe's interval [0, F) or [F, 1) (eq. 40, Jacobian F or 1 - F); uDir is unread (gamma.fill).
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery&) const override {
+    if (wo.z == 0) return std::nullopt;
+    float cosThetaT;
+    const float F = fresnelDielectric(wo.z, eta_, &cosThetaT);
+    if (F > 0 && sameDeltaDirection(wi, reflectZ(wo))) return BsdfSampleInverse{invertInterval(0, F, gamma.pick), gamma.fill, F};
+    if (F < 1 && sameDeltaDirection(wi, refractZ(wo, cosThetaT, eta_)))
+      return BsdfSampleInverse{invertInterval(F, 1, gamma.pick), gamma.fill, 1 - F};
+    return std::nullopt;
   }
   bool isDelta() const override { return true; }
   Color albedo(const Vec2&) const override { return colorMax(specR_, specT_); }

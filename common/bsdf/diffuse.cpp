@@ -1,6 +1,7 @@
 // Lambertian reflection (Mitsuba's `diffuse`).
 #include "common/bsdf/bsdfs.h"
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -27,6 +28,12 @@ class Diffuse final : public Bsdf {
     s.pdfW = cosineHemispherePdfW(s.wi.z);
     s.pdfRevW = cosineHemispherePdfW(wo.z);
     return s;
+  }
+  // Inverse: uComponent is not read (gamma.pick); uDir inverts the cosine-weighted hemisphere.
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery&) const override {
+    if (wo.z <= 0 || wi.z <= 0) return std::nullopt;
+    return BsdfSampleInverse{clampPrimary(gamma.pick), invertCosineHemisphere(wi), cosineHemispherePdfW(wi.z)};
   }
   bool isDelta() const override { return false; }
   Color albedo(const Vec2& uv) const override { return rho_->eval(uv); }

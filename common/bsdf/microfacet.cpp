@@ -136,4 +136,65 @@ Vec3 Microfacet::sampleBeckmann(const Vec3& v, Vec2 u) const {
   return {float(mx / len), float(my / len), float(1 / len)};
 }
 
+// ---- Inverses (reversible-jump MLT; Bitterli et al. 2017, sec. 6 "inversion method") --------------------
+
+std::optional<Vec2> Microfacet::invertVisible(const Vec3& v, const Vec3& m) const {
+  if (!(v.z > 0) || !(m.z > 0) || !(dot(v, m) > 0)) return std::nullopt;
+  return type_ == MicrofacetType::GGX ? invertGGX(v, m) : invertBeckmann(v, m);
+}
+
+// Heitz 2018, listing 1 backwards: stretch m to the hemisphere configuration nh, read its coordinates
+// (p1, p2') in the frame (t1, t2, vh), undo the warp p2' = (1 - s) sqrt(1 - p1^2) + s p2 of the
+// half-disk, and invert the uniform disk (r = sqrt(u1), phi = 2 pi u2).
+std::optional<Vec2> Microfacet::invertGGX(const Vec3& v, const Vec3& m) const {
+  const Vec3 vh = normalize(Vec3(alpha_ * v.x, alpha_ * v.y, v.z));
+  const float lensq = vh.x * vh.x + vh.y * vh.y;
+  const Vec3 t1 = lensq > 0 ? Vec3(-vh.y, vh.x, 0) / std::sqrt(lensq) : Vec3(1, 0, 0);
+  const Vec3 t2 = cross(vh, t1);
+  const Vec3 nh = normalize(Vec3(m.x / alpha_, m.y / alpha_, m.z));
+  if (!(dot(nh, vh) >= -1e-4f)) return std::nullopt;
+  const double p1 = dot(nh, t1), p2w = dot(nh, t2);
+  const double s = 0.5 * (1 + double(vh.z));
+  const double p2 = (p2w - (1 - s) * std::sqrt(std::max(0.0, 1 - p1 * p1))) / s;
+  const double r2 = p1 * p1 + p2 * p2;
+  if (!(r2 <= 1 + 1e-4)) return std::nullopt;
+  double phi = std::atan2(p2, p1);
+  if (phi < 0) phi += 2 * kPiD;
+  return Vec2(std::clamp(float(r2), 0.0f, kOneMinusEpsilon), std::clamp(float(phi / (2 * kPiD)), 0.0f, kOneMinusEpsilon));
+}
+
+// sampleBeckmann backwards: the slopes of m, rotated back by the azimuth of the stretched direction, are
+// (slopeX, slopeY); u1 is the visible slope CDF C(slopeX) (the function sampleBeckmann inverts by Newton),
+// u2 = (1 + erf(slopeY)) / 2. Near normal incidence the slopes are polar: r^2 = -log(1 - u1), phi = 2 pi u2.
+std::optional<Vec2> Microfacet::invertBeckmann(const Vec3& v, const Vec3& m) const {
+  const Vec3 vs = normalize(Vec3(alpha_ * v.x, alpha_ * v.y, v.z));
+  const double cosThetaI = vs.z;
+  const double sx = -double(m.x) / (double(alpha_) * m.z), sy = -double(m.y) / (double(alpha_) * m.z);
+  const double sinT = std::sqrt(std::max(0.0, 1 - cosThetaI * cosThetaI));
+  double cosPhi = 1, sinPhi = 0;
+  if (sinT > 0) {
+    cosPhi = std::clamp(vs.x / sinT, -1.0, 1.0);
+    sinPhi = std::clamp(vs.y / sinT, -1.0, 1.0);
+  }
+  // The forward rotation [cosPhi -sinPhi; sinPhi cosPhi] is not exactly orthonormal near normal incidence
+  // (sinT from a float cosine): invert the 2x2 matrix itself, not its transpose.
+  const double det = cosPhi * cosPhi + sinPhi * sinPhi;
+  const double slopeX = (cosPhi * sx + sinPhi * sy) / det, slopeY = (-sinPhi * sx + cosPhi * sy) / det;
+  double u1, u2;
+  if (cosThetaI > 0.99999) {
+    u1 = 1 - std::exp(-(slopeX * slopeX + slopeY * slopeY));
+    double phi = std::atan2(slopeY, slopeX);
+    if (phi < 0) phi += 2 * kPiD;
+    u2 = phi / (2 * kPiD);
+  } else {
+    const double tanThetaI = sinT / cosThetaI, cotThetaI = 1 / tanThetaI;
+    if (!(slopeX <= cotThetaI * (1 + 1e-6) + 1e-9)) return std::nullopt;  // a back-facing microfacet
+    const double erfCot = std::erf(cotThetaI);
+    const double norm = 1 / (1 + erfCot + tanThetaI / kSqrtPi * std::exp(-cotThetaI * cotThetaI));
+    u1 = norm * (1 + std::erf(slopeX) + tanThetaI / kSqrtPi * std::exp(-slopeX * slopeX));
+    u2 = 0.5 * (1 + std::erf(slopeY));
+  }
+  return Vec2(std::clamp(float(u1), 0.0f, kOneMinusEpsilon), std::clamp(float(u2), 0.0f, kOneMinusEpsilon));
+}
+
 }  // namespace mlt

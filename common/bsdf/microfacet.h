@@ -5,6 +5,8 @@
 //    solved here in double precision to ~1e-9 so sampling matches pdfVisible.
 // Local frame, microfacet normals m in the upper hemisphere.
 #pragma once
+#include <optional>
+
 #include "common/core/vec.h"
 #include "common/scene/scene_desc.h"
 
@@ -31,6 +33,9 @@ class Microfacet {
   // Samples m from the distribution of normals visible from v (v.z > 0):
   // D_v(m) = G1(v) max(0, v.m) D(m) / v.z  (Heitz 2014, eq. 2).
   Vec3 sampleVisible(const Vec3& v, Vec2 u) const;
+  // Inverse of sampleVisible (reversible-jump MLT): the u with which sampleVisible(v, u) returns m, or
+  // nullopt if m is not visible from v. Jacobian |du/dm| = pdfVisible(v, m).
+  std::optional<Vec2> invertVisible(const Vec3& v, const Vec3& m) const;
   float pdfVisible(const Vec3& v, const Vec3& m) const {
     if (v.z <= 0) return 0;
     const float vm = dot(v, m);
@@ -41,6 +46,8 @@ class Microfacet {
  private:
   Vec3 sampleGGX(const Vec3& v, Vec2 u) const;
   Vec3 sampleBeckmann(const Vec3& v, Vec2 u) const;
+  std::optional<Vec2> invertGGX(const Vec3& v, const Vec3& m) const;
+  std::optional<Vec2> invertBeckmann(const Vec3& v, const Vec3& m) const;
   MicrofacetType type_;
   float alpha_;
 };

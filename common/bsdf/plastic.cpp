@@ -12,6 +12,7 @@
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -54,6 +55,20 @@ class Plastic final : public Bsdf {
     s.pdfW = pdf(wo, s.wi, q);
     s.pdfRevW = pdf(s.wi, wo, q);
     return s;
+  }
+  // Inverse: the Dirac coat reflection owns the mirror direction (the diffuse lobe reaches it with
+  // probability zero): uComponent in [0, P_spec), uDir unread (gamma.fill), Jacobian P_spec. Any other
+  // direction is diffuse: uComponent in [P_spec, 1), uDir inverts the cosine hemisphere, Jacobian = pdf.
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery& q) const override {
+    if (wo.z <= 0) return std::nullopt;
+    const float pSpec = probSpecular(wo.z);
+    if (sameDeltaDirection(wi, reflectZ(wo))) {
+      if (!(pSpec > 0)) return std::nullopt;
+      return BsdfSampleInverse{invertInterval(0, pSpec, gamma.pick), gamma.fill, pSpec};
+    }
+    if (wi.z <= 0 || !(pSpec < 1)) return std::nullopt;
+    return BsdfSampleInverse{invertInterval(pSpec, 1, gamma.pick), invertCosineHemisphere(wi), pdf(wo, wi, q)};
   }
   bool isDelta() const override { return false; }
   // Normal-incidence estimate: specular F(1) plus the diffuse albedo (1 - F) rho.

@@ -7,6 +7,7 @@
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
 #include "common/bsdf/microfacet.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -44,6 +45,17 @@ class RoughConductor final : public Bsdf {
     s.pdfRevW = pdf(s.wi, wo, q);
     if (s.pdfW <= 0) return std::nullopt;
     return s;
+  }
+  // Inverse: the half vector is the sampled microfacet normal; uDir inverts the visible-normal routine,
+  // uComponent is unread (gamma.pick). Jacobian = pdf (= D_wo(h) / (4 wo.h)).
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery& q) const override {
+    if (wo.z <= 0 || wi.z <= 0) return std::nullopt;
+    const float pdfW = pdf(wo, wi, q);
+    if (!(pdfW > 0)) return std::nullopt;
+    const std::optional<Vec2> uDir = mf_.invertVisible(wo, normalize(wo + wi));
+    if (!uDir) return std::nullopt;
+    return BsdfSampleInverse{clampPrimary(gamma.pick), *uDir, pdfW};
   }
   bool isDelta() const override { return false; }
   Color albedo(const Vec2&) const override { return specR_ * fresnel(1); }

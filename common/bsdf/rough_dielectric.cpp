@@ -16,6 +16,7 @@
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
 #include "common/bsdf/microfacet.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -103,6 +104,24 @@ class RoughDielectric final : public Bsdf {
     return s;
   }
 
+  // Inverse: the generalized half vector (eq. 16, oriented to the exterior) is the sampled microfacet
+  // normal m; uDir inverts the visible normals seen from wo (mirrored up); the side of wi decides the
+  // lobe, so uComponent lies in [0, F(wo.m)) for reflection or [F, 1) for refraction (eq. 40).
+  // Jacobian = pdf (which includes F or 1 - F).
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery& q) const override {
+    const std::optional<Half> hv = halfVector(wo, wi);
+    if (!hv) return std::nullopt;
+    const float pdfW = pdf(wo, wi, q);
+    if (!(pdfW > 0)) return std::nullopt;
+    const Vec3 woUp = wo.z > 0 ? wo : -wo;
+    const std::optional<Vec2> uDir = mf_.invertVisible(woUp, hv->h);
+    if (!uDir) return std::nullopt;
+    const float F = fresnelDielectric(dot(wo, hv->h), eta_);
+    if (hv->reflect ? !(F > 0) : !(F < 1)) return std::nullopt;
+    const float uc = hv->reflect ? invertInterval(0, F, gamma.pick) : invertInterval(F, 1, gamma.pick);
+    return BsdfSampleInverse{uc, *uDir, pdfW};
+  }
   bool isDelta() const override { return false; }
   Color albedo(const Vec2&) const override {
     return {std::fmax(specR_.r, specT_.r), std::fmax(specR_.g, specT_.g), std::fmax(specR_.b, specT_.b)};

@@ -18,6 +18,7 @@
 #include "common/bsdf/fresnel.h"
 #include "common/bsdf/microfacet.h"
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -59,6 +60,35 @@ class RoughPlastic final : public Bsdf {
     s.f = eval(wo, s.wi, q);
     s.pdfRevW = pdf(s.wi, wo, q);
     return s;
+  }
+  // Inverse: a mixture of two lobes that both reach every upper-hemisphere wi (eq. 34). Following
+  // Bitterli et al. eq. 41-44, the lobe t is picked with T(t) = alpha_t p_t(wi) / sum_s alpha_s p_s(wi)
+  // (alpha_spec = P_spec, p_spec = D_wo(h) / (4 wo.h); alpha_diff = 1 - P_spec, p_diff = cos / pi) using
+  // gamma.pick, which is then remapped into the lobe's uComponent interval (eq. 40); uDir inverts the
+  // lobe's routine. Reported Jacobian: alpha_t p_t / T(t) = the mixture pdf (eq. 42 with eq. 43 folded in).
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery& q) const override {
+    if (wo.z <= 0 || wi.z <= 0) return std::nullopt;
+    const float pSpec = probSpecular(wo.z);
+    const Vec3 h = normalize(wo + wi);
+    const float woh = dot(wo, h);
+    const float pdfSpec = woh > 0 ? mf_.pdfVisible(wo, h) / (4 * woh) : 0.0f;
+    const float weight[2] = {pSpec * pdfSpec, (1 - pSpec) * cosineHemispherePdfW(wi.z)};
+    float gammaRest = 0;
+    const int lobe = pickByWeight(weight, 2, gamma.pick, &gammaRest);
+    if (lobe < 0) return std::nullopt;
+    BsdfSampleInverse inv;
+    if (lobe == 0) {
+      const std::optional<Vec2> uDir = mf_.invertVisible(wo, h);
+      if (!uDir) return std::nullopt;
+      inv.uComponent = invertInterval(0, pSpec, gammaRest);
+      inv.uDir = *uDir;
+    } else {
+      inv.uComponent = invertInterval(pSpec, 1, gammaRest);
+      inv.uDir = invertCosineHemisphere(wi);
+    }
+    inv.jacobian = pdf(wo, wi, q);
+    return inv;
   }
   bool isDelta() const override { return false; }
   Color albedo(const Vec2& uv) const override { return specR_ * (1 - T(1)) + rhoEff(uv) * T(1); }

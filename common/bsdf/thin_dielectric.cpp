@@ -4,6 +4,7 @@
 
 #include "common/bsdf/bsdfs.h"
 #include "common/bsdf/fresnel.h"
+#include "common/core/sampling_inverse.h"
 
 namespace mlt {
 
@@ -36,6 +37,15 @@ class ThinDielectric final : public Bsdf {
       s.pdfW = s.pdfRevW = T;
     }
     return s;
+  }
+  // Inverse: reflection [0, R) or straight transmission [R, 1) (eq. 40); uDir unread (gamma.fill).
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery&) const override {
+    if (wo.z == 0) return std::nullopt;
+    const float R = slabReflectance(std::fabs(wo.z)), T = 1 - R;
+    if (R > 0 && sameDeltaDirection(wi, reflectZ(wo))) return BsdfSampleInverse{invertInterval(0, R, gamma.pick), gamma.fill, R};
+    if (T > 0 && sameDeltaDirection(wi, -wo)) return BsdfSampleInverse{invertInterval(R, 1, gamma.pick), gamma.fill, T};
+    return std::nullopt;
   }
   bool isDelta() const override { return true; }
   Color albedo(const Vec2&) const override { return colorMax(specR_, specT_); }

@@ -23,6 +23,11 @@ class TwoSided final : public Bsdf {
     if (s) s->wi = flip(s->wi);
     return s;
   }
+  std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
+                                                const BsdfQuery& q) const override {
+    if (wo.z >= 0) return nested_->invertSample(wo, wi, gamma, q);
+    return nested_->invertSample(flip(wo), flip(wi), gamma, q);
+  }
   bool isDelta() const override { return nested_->isDelta(); }
   Color albedo(const Vec2& uv) const override { return nested_->albedo(uv); }
 

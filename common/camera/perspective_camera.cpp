@@ -17,6 +17,7 @@
 #include <string>
 
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/camera/make_camera.h"
 #include "common/scene/scene_desc.h"
 
@@ -32,6 +33,8 @@ class PerspectiveCamera final : public Camera {
   void pdfWe(const Ray& ray, float* pdfPos, float* pdfDir) const override;
   std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 uLens) const override;
   std::optional<Vec2> rasterPosition(const Vec3& p) const override;
+  std::optional<CameraRayInverse> invertGenerateRay(const Ray& ray, const InverseGamma& gamma) const override;
+  std::optional<Inverse2D> invertSampleWi(const Vec3& ref, const Vec3& pLens, const InverseGamma& gamma) const override;
   bool deltaPosition() const override { return lensRadius_ == 0; }
 
  private:
@@ -40,6 +43,9 @@ class PerspectiveCamera final : public Camera {
   Vec3 toCameraPoint(const Vec3& p) const { return toCameraDir(p - o_); }
   // Raster position of a camera-space point (projection through the lens center); false if outside.
   bool project(const Vec3& pc, Vec2* pRaster) const;
+  // The lens sample of a camera-space lens point (inverse of the concentric disk scaled by the radius);
+  // nullopt if the point is not on the lens.
+  std::optional<Inverse2D> invertLens(const Vec3& pLensCam, const InverseGamma& gamma) const;
 
   Vec3 o_, X_, Y_, Z_;  // camera position and orthonormal axes in world space (X = left)
   float tx_ = 1, ty_ = 1, A_ = 4;
@@ -176,6 +182,57 @@ std::optional<Vec2> PerspectiveCamera::rasterPosition(const Vec3& p) const {
   Vec2 r;
   if (!project(pc, &r)) return std::nullopt;
   return r;
+}
+
+// ---- Inverses (reversible-jump MLT; interfaces/inverse.h) ---------------------------------------------
+
+std::optional<Inverse2D> PerspectiveCamera::invertLens(const Vec3& pLensCam, const InverseGamma& gamma) const {
+  if (lensRadius_ == 0) {  // a pinhole reads no lens numbers; the point must be the pinhole itself
+    if (!(length(pLensCam) <= 1e-4f * std::fmax(1.0f, length(o_)))) return std::nullopt;
+    return Inverse2D{gamma.fill, 1.0f};
+  }
+  const float tol = 1e-4f * lensRadius_;
+  const Vec2 d(pLensCam.x / lensRadius_, pLensCam.y / lensRadius_);
+  if (!(std::fabs(pLensCam.z) <= tol) || !(d.x * d.x + d.y * d.y <= 1 + 2e-4f)) return std::nullopt;
+  return Inverse2D{invertConcentricDisk(d), 1 / lensArea_};  // Jacobian: pdfPos = 1 / (pi r^2)
+}
+
+// generateRay maps pRaster to pFilm on z = 1 and, with a lens, aims from pLens at pFilm * focus. Backwards:
+// the lens point gives uLens; the ray's crossing of the plane z = focus (z = 1 for a pinhole) divided by
+// the focus distance is pFilm, and x_cam = -(2 px / W - 1) tx, y_cam = (1 - 2 py / H) ty give pRaster.
+// jacobianRaster: pixels per steradian. The film area at z = 1 per solid angle is 1 / cos^3(theta) (for a
+// thin lens too: the plane in focus scales both by focus^2), and a unit of film area is W H / A pixels,
+// so |d pRaster / d w| = W H / (A cos^3 theta) = W H pdfDir.
+std::optional<CameraRayInverse> PerspectiveCamera::invertGenerateRay(const Ray& ray, const InverseGamma& gamma) const {
+  const Vec3 dCam = toCameraDir(normalize(ray.d));
+  if (!(dCam.z > 0)) return std::nullopt;
+  const Vec3 pLensCam = toCameraPoint(ray.o);
+  const std::optional<Inverse2D> lens = invertLens(pLensCam, gamma);
+  if (!lens) return std::nullopt;
+  const float depth = lensRadius_ > 0 ? focus_ : 1.0f;
+  const Vec3 pFocus = (lensRadius_ > 0 ? pLensCam : Vec3(0, 0, 0)) + dCam * (depth / dCam.z);
+  const float xFilm = pFocus.x / depth, yFilm = pFocus.y / depth;
+  CameraRayInverse inv;
+  inv.pRaster = {(1 - xFilm / tx_) * 0.5f * float(width_), (1 - yFilm / ty_) * 0.5f * float(height_)};
+  if (!(inv.pRaster.x >= 0 && inv.pRaster.x < float(width_) && inv.pRaster.y >= 0 && inv.pRaster.y < float(height_)))
+    return std::nullopt;
+  const float cosTheta = dCam.z / length(dCam);
+  inv.jacobianRaster = float(width_) * float(height_) / (A_ * cosTheta * cosTheta * cosTheta);
+  inv.lens = *lens;
+  return inv;
+}
+
+std::optional<Inverse2D> PerspectiveCamera::invertSampleWi(const Vec3& ref, const Vec3& pLens,
+                                                           const InverseGamma& gamma) const {
+  if (toCameraPoint(ref).z < nearClip_) return std::nullopt;
+  const std::optional<Inverse2D> lens = invertLens(toCameraPoint(pLens), gamma);
+  if (!lens) return std::nullopt;
+  Ray toRef;
+  toRef.o = pLens;
+  toRef.d = ref - pLens;
+  if (!(lengthSquared(toRef.d) > 0)) return std::nullopt;
+  if (We(toRef, nullptr).isBlack()) return std::nullopt;  // sampleWi would not return this lens point
+  return lens;
 }
 
 }  // namespace

@@ -2,11 +2,13 @@
 // uniform point on it), constant radiance Le emitted on the front side only (dot(w, ng) > 0, ng from the
 // counter-clockwise winding), like Mitsuba's `area` emitter.
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/emitter/light_factories.h"
 #include "common/emitter/make_light.h"
 #include "common/scene/scene_desc.h"
@@ -25,6 +27,10 @@ class AreaLight final : public Light {
   Color L(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& w) const override {
     return dot(n, w) > 0 ? Le_ : Color();
   }
+  std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight,
+                                          const InverseGamma& gamma) const override;
+  std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w,
+                                               const InverseGamma& gamma) const override;
   // Phi = integral over area and hemisphere of Le cos = pi * A * Le.
   Color power() const override { return Le_ * (kPi * area_); }
 
@@ -33,6 +39,9 @@ class AreaLight final : public Light {
     Vec3 p, ng;
   };
   PointSample samplePoint(Vec2 u) const;
+  // Inverse of samplePoint: the u that lands on p (the triangle found by search), or nullopt if p is on
+  // no triangle of the mesh.
+  std::optional<Vec2> invertPoint(const Vec3& p) const;
 
   std::vector<Vec3> v_;        // 3 vertices per triangle
   std::vector<Vec3> ng_;       // unit geometric normal per triangle
@@ -130,6 +139,71 @@ std::optional<LightLeSample> AreaLight::sampleLe(Vec2 uPos, Vec2 uDir) const {
 void AreaLight::pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const {
   *pdfPos = 1.0f / area_;
   *pdfDir = cosineHemispherePdfW(dot(nLight, w));
+}
+
+// ---- Inverses (reversible-jump MLT; interfaces/inverse.h) ---------------------------------------------
+
+// The triangle holding p is found by a linear search (the one with the smallest distance to p, counting
+// distance off the plane and outside the edges; a point on a shared edge may go to either, a set of
+// measure zero). samplePoint's u.x picks the triangle through the CDF and is remapped inside the chosen
+// interval, so u.x = cdf_i + w_i ux is one-to-one (no ambiguity), and b0 = 1 - sqrt(ux), b1 = uy sqrt(ux).
+// Jacobian (per unit area): (area_i / A) * (1 / area_i) = 1 / A.
+std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
+  const size_t nTri = ng_.size();
+  size_t best = nTri;
+  double bestErr = 0, bestB0 = 0, bestB1 = 0;
+  for (size_t i = 0; i < nTri; ++i) {
+    const Vec3* v = &v_[3 * i];
+    const double e0[3] = {double(v[1].x) - v[0].x, double(v[1].y) - v[0].y, double(v[1].z) - v[0].z};
+    const double e1[3] = {double(v[2].x) - v[0].x, double(v[2].y) - v[0].y, double(v[2].z) - v[0].z};
+    const double d[3] = {double(p.x) - v[0].x, double(p.y) - v[0].y, double(p.z) - v[0].z};
+    auto dt = [](const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    const double d00 = dt(e0, e0), d01 = dt(e0, e1), d11 = dt(e1, e1), d20 = dt(d, e0), d21 = dt(d, e1);
+    const double den = d00 * d11 - d01 * d01;
+    if (!(den > 0)) continue;
+    const double b1 = (d11 * d20 - d01 * d21) / den, b2 = (d00 * d21 - d01 * d20) / den, b0 = 1 - b1 - b2;
+    const double size = std::sqrt(std::max(d00, d11));
+    const double n[3] = {double(ng_[i].x), double(ng_[i].y), double(ng_[i].z)};
+    const double off = std::fabs(dt(d, n));
+    const double err = off / size + std::max({0.0, -b0, -b1, -b2});
+    if (best == nTri || err < bestErr) {
+      best = i;
+      bestErr = err;
+      bestB0 = b0;
+      bestB1 = b1;
+    }
+  }
+  if (best == nTri || !(bestErr <= 1e-4)) return std::nullopt;
+  const Vec2 ut = invertUniformTriangle(std::clamp(bestB0, 0.0, 1.0), std::clamp(bestB1, 0.0, 1.0));
+  const double lo = cdf_[best], hi = cdf_[best + 1];
+  if (!(hi > lo)) return std::nullopt;
+  float ux = static_cast<float>(lo + double(ut.x) * (hi - lo));
+  while (double(ux) >= hi && ux > 0) ux = std::nextafter(ux, 0.0f);  // stay in triangle i's interval
+  while (double(ux) < lo) ux = std::nextafter(ux, 1.0f);
+  return Vec2(clampPrimary(ux), ut.y);
+}
+
+std::optional<Inverse2D> AreaLight::invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,
+                                                   const InverseGamma&) const {
+  if (!(distanceSquared(ref, pLight) > 0)) return std::nullopt;
+  const std::optional<Vec2> u = invertPoint(pLight);
+  if (!u) return std::nullopt;
+  return Inverse2D{*u, 1.0f / area_};
+}
+
+// The direction was drawn cosine-weighted about the triangle's normal: its local (x, y) is the disk point.
+std::optional<LightLeInverse> AreaLight::invertSampleLe(const Vec3& pLight, const Vec3&, const Vec3& w,
+                                                        const InverseGamma&) const {
+  const std::optional<Vec2> u = invertPoint(pLight);
+  if (!u) return std::nullopt;
+  const Vec3 ng = samplePoint(*u).ng;
+  const Vec3 local = Frame(ng).toLocal(normalize(w));
+  const float pdfDir = cosineHemispherePdfW(local.z);
+  if (!(pdfDir > 0)) return std::nullopt;
+  LightLeInverse inv;
+  inv.pos = Inverse2D{*u, 1.0f / area_};
+  inv.dir = Inverse2D{invertCosineHemisphere(local), pdfDir};
+  return inv;
 }
 
 }  // namespace

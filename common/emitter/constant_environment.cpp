@@ -1,6 +1,7 @@
 // Constant environment: radiance L arriving from every direction at infinity (infinite_disk.h for the
 // conventions).
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/emitter/infinite_disk.h"
 #include "common/emitter/light_factories.h"
 
@@ -37,6 +38,22 @@ class ConstantEnvironment final : public Light {
   void pdfLe(const Vec3&, const Vec3&, const Vec3&, float* pdfPos, float* pdfDir) const override {
     *pdfPos = 1 / (kPi * R_ * R_);
     *pdfDir = uniformSpherePdfW();
+  }
+  // Inverses (interfaces/inverse.h): sampleLi's direction is uniform on the sphere; sampleLe's direction
+  // likewise and its origin a point of the disk perpendicular to it (infinite_disk.h).
+  std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,
+                                          const InverseGamma&) const override {
+    const Vec3 wi = pLight - ref;
+    if (!(lengthSquared(wi) > 0)) return std::nullopt;
+    return Inverse2D{invertUniformSphere(normalize(wi)), uniformSpherePdfW()};
+  }
+  std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3&, const Vec3& w,
+                                               const InverseGamma&) const override {
+    if (!(lengthSquared(w) > 0)) return std::nullopt;
+    const Vec3 wn = normalize(w);
+    const std::optional<Vec2> uPos = invertDiskOrigin(c_, R_, wn, pLight);
+    if (!uPos) return std::nullopt;
+    return LightLeInverse{{*uPos, 1 / (kPi * R_ * R_)}, {invertUniformSphere(wn), uniformSpherePdfW()}};
   }
   Color Le(const Vec3&) const override { return L_; }
   // Flux entering the bounding sphere: pi L per unit area (cosine-weighted hemisphere) times 4 pi R^2

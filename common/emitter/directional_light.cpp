@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/emitter/infinite_disk.h"
 #include "common/emitter/light_factories.h"
 
@@ -39,11 +40,27 @@ class DirectionalLight final : public Light {
     *pdfPos = 1 / (kPi * R_ * R_);
     *pdfDir = 0;
   }
+  // Inverses (interfaces/inverse.h): sampleLi reads no numbers (gamma.fill, pdf 1) and only returns the
+  // direction -d; sampleLe's origin is a point of the disk (infinite_disk.h), its direction a delta.
+  std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,
+                                          const InverseGamma& gamma) const override {
+    const Vec3 wi = pLight - ref;
+    if (!(lengthSquared(wi) > 0) || !sameDirection(-normalize(wi))) return std::nullopt;
+    return Inverse2D{gamma.fill, 1.0f};
+  }
+  std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3&, const Vec3& w,
+                                               const InverseGamma& gamma) const override {
+    if (!(lengthSquared(w) > 0) || !sameDirection(normalize(w))) return std::nullopt;
+    const std::optional<Vec2> uPos = invertDiskOrigin(c_, R_, d_, pLight);
+    if (!uPos) return std::nullopt;
+    return LightLeInverse{{*uPos, 1 / (kPi * R_ * R_)}, {gamma.fill, 1.0f}};
+  }
   Color power() const override { return E_ * (kPi * R_ * R_); }  // flux through the scene's disk
   bool deltaDirection() const override { return true; }
   bool infinite() const override { return true; }
 
  private:
+  bool sameDirection(const Vec3& w) const { return dot(w, d_) >= 1 - 1e-5f; }
   Vec3 d_;   // travel direction
   Color E_;
   Vec3 c_;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/core/sampling_inverse.h"
+
 namespace mlt {
 
 // pmf_i = luminance(Phi_i) / sum_j luminance(Phi_j); uniform if every light has zero power.
@@ -49,6 +51,14 @@ int LightSampler::sample(float u, float* pmf) const {
 
 float LightSampler::pmf(int lightIndex) const {
   return lightIndex >= 0 && size_t(lightIndex) < pmf_.size() ? pmf_[lightIndex] : 0.0f;
+}
+
+std::optional<float> LightSampler::invertSample(int lightIndex, float gamma) const {
+  if (lightIndex < 0 || size_t(lightIndex) >= pmf_.size() || !(pmf_[lightIndex] > 0)) return std::nullopt;
+  const float u = invertInterval(cdf_[lightIndex], cdf_[lightIndex + 1], gamma);
+  float pmf = 0;
+  if (sample(u, &pmf) != lightIndex) return std::nullopt;  // an interval lost to float rounding
+  return u;
 }
 
 }  // namespace mlt

@@ -2,6 +2,7 @@
 // Conventions (interfaces/light.h): sampleLi's pdfW = pdfA = 1 and L = I / dist^2 (pbrt-v3); it can never
 // be hit, so pdfLi = 0; sampleLe's pdfPos = 1 and L is the intensity I.
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/emitter/light_factories.h"
 
 namespace mlt {
@@ -37,10 +38,23 @@ class PointLight final : public Light {
     *pdfPos = 1;
     *pdfDir = uniformSpherePdfW();
   }
+  // Inverses (interfaces/inverse.h): the position is a delta (pdf 1), its numbers unread (gamma.fill);
+  // the emitted direction is uniform on the sphere.
+  std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,
+                                          const InverseGamma& gamma) const override {
+    if (!samePoint(pLight) || !(distanceSquared(ref, p_) > 0)) return std::nullopt;
+    return Inverse2D{gamma.fill, 1.0f};
+  }
+  std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3&, const Vec3& w,
+                                               const InverseGamma& gamma) const override {
+    if (!samePoint(pLight) || !(lengthSquared(w) > 0)) return std::nullopt;
+    return LightLeInverse{{gamma.fill, 1.0f}, {invertUniformSphere(normalize(w)), uniformSpherePdfW()}};
+  }
   Color power() const override { return I_ * (4 * kPi); }
   bool deltaPosition() const override { return true; }
 
  private:
+  bool samePoint(const Vec3& p) const { return distance(p, p_) <= 1e-4f * std::fmax(1.0f, length(p_)); }
   Vec3 p_;
   Color I_;
 };

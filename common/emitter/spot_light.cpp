@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/core/sampling.h"
+#include "common/core/sampling_inverse.h"
 #include "common/emitter/light_factories.h"
 
 namespace mlt {
@@ -59,6 +60,19 @@ class SpotLight final : public Light {
     *pdfPos = 1;
     *pdfDir = dot(w, frame_.n) > cosCutoff_ ? uniformConePdfW(cosCutoff_) : 0.0f;
   }
+  // Inverses (interfaces/inverse.h): delta position (gamma.fill, pdf 1); directions uniform in the cone.
+  std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,
+                                          const InverseGamma& gamma) const override {
+    if (!samePoint(pLight) || !(distanceSquared(ref, p_) > 0)) return std::nullopt;
+    return Inverse2D{gamma.fill, 1.0f};
+  }
+  std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3&, const Vec3& w,
+                                               const InverseGamma& gamma) const override {
+    if (!samePoint(pLight) || !(lengthSquared(w) > 0)) return std::nullopt;
+    const Vec3 local = frame_.toLocal(normalize(w));
+    if (!(local.z > cosCutoff_)) return std::nullopt;
+    return LightLeInverse{{gamma.fill, 1.0f}, {invertUniformCone(local, cosCutoff_), uniformConePdfW(cosCutoff_)}};
+  }
   // Phi = 2 pi I int_0^c f(theta) sin(theta) dtheta with f linear in theta between beam b and cutoff c:
   //     = 2 pi I (1 - (sin c - sin b) / (c - b))   (-> 2 pi I (1 - cos c) as b -> c).
   Color power() const override {
@@ -69,6 +83,7 @@ class SpotLight final : public Light {
   bool deltaPosition() const override { return true; }
 
  private:
+  bool samePoint(const Vec3& p) const { return distance(p, p_) <= 1e-4f * std::fmax(1.0f, length(p_)); }
   Vec3 p_;
   Frame frame_;
   Color I_;

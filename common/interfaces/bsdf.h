@@ -44,6 +44,13 @@ struct BsdfQuery {
   TransportMode mode = TransportMode::Radiance;
 };
 
+// 1 - cos of the largest angle between a given direction and a Dirac lobe's direction that still counts as
+// that lobe (about 4.5e-3 rad): a path turned back into numbers carries rounding from its vertex positions.
+constexpr float kDeltaDirectionTolerance = 1e-5f;
+inline bool sameDeltaDirection(const Vec3& a, const Vec3& b) {
+  return dot(a, b) >= (1 - kDeltaDirectionTolerance) * std::sqrt(dot(a, a) * dot(b, b));
+}
+
 class Bsdf {
  public:
   virtual ~Bsdf() = default;
@@ -55,11 +62,13 @@ class Bsdf {
   // Consumes exactly kBsdfDims - 1 = 3 numbers: uComponent then uDir (2D). nullopt = absorbed.
   virtual std::optional<BsdfSample> sample(const Vec3& wo, float uComponent, Vec2 uDir, const BsdfQuery& q) const = 0;
   // Inverse of sample(): the primary numbers that produce wi given wo, or nullopt when this BSDF has no
-  // inverse (the default) or sample() cannot produce wi. uPick (in [0,1)) chooses uniformly among the
-  // preimages where several exist (uComponent within the chosen component's interval).
-  virtual std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, float uPick,
+  // inverse (the default) or sample() cannot produce wi. gamma.pick chooses the component by T(t) of
+  // eq. 44 where several could have produced wi, then uComponent inside its interval (eq. 40);
+  // gamma.fill becomes uDir where the chosen component does not read it (Dirac components).
+  // A Dirac direction is matched within kDeltaDirectionTolerance.
+  virtual std::optional<BsdfSampleInverse> invertSample(const Vec3& wo, const Vec3& wi, const InverseGamma& gamma,
                                                         const BsdfQuery& q) const {
-    (void)wo; (void)wi; (void)uPick; (void)q;
+    (void)wo; (void)wi; (void)gamma; (void)q;
     return std::nullopt;
   }
   // True if every component is a Dirac delta (mirror, glass): such a vertex cannot be connected to.

@@ -45,9 +45,10 @@ class Camera {
   // pRaster in pixels, (0,0) = top-left corner of the film; uLens in [0,1)^2. Consumes nothing itself.
   virtual CameraRay generateRay(Vec2 pRaster, Vec2 uLens) const = 0;
   // Inverse of generateRay(): the (pRaster, uLens) that generate `ray` (o on the lens, d unit), or
-  // nullopt: no inverse (the default) or the ray misses the film.
-  virtual std::optional<CameraRayInverse> invertGenerateRay(const Ray& ray) const {
-    (void)ray;
+  // nullopt: no inverse (the default) or the ray misses the film. A pinhole does not read uLens: it is
+  // gamma.fill with Jacobian 1.
+  virtual std::optional<CameraRayInverse> invertGenerateRay(const Ray& ray, const InverseGamma& gamma) const {
+    (void)ray; (void)gamma;
     return std::nullopt;
   }
   // Importance for a ray leaving the lens at ray.o in direction ray.d; sets *pRaster if the ray hits the
@@ -58,9 +59,10 @@ class Camera {
   // Consumes 2 numbers (uLens); nullopt if ref is not visible on the film.
   virtual std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 uLens) const = 0;
   // Inverse of sampleWi(ref): the uLens with which it picks pLens; jacobian = pdfPos of pLens (per unit
-  // lens area). nullopt: no inverse (the default), a pinhole (nothing to invert), or ref not visible.
-  virtual std::optional<Inverse2D> invertSampleWi(const Vec3& ref, const Vec3& pLens) const {
-    (void)ref; (void)pLens;
+  // lens area). A pinhole does not read uLens: gamma.fill, Jacobian 1 (its pdfPos). nullopt: no inverse
+  // (the default), pLens not on the lens, or ref not visible.
+  virtual std::optional<Inverse2D> invertSampleWi(const Vec3& ref, const Vec3& pLens, const InverseGamma& gamma) const {
+    (void)ref; (void)pLens; (void)gamma;
     return std::nullopt;
   }
   // Raster position of a world point, if it lands on the film (pinhole projection through the lens center).

@@ -50,20 +50,20 @@ class Light {
   // Solid-angle density with which sampleLi(ref) picks direction wi hitting pLight with normal nLight.
   virtual float pdfLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight, const Vec3& wi) const = 0;
   // Inverse of sampleLi(ref): the u with which it returns pLight (normal nLight); jacobian = the pdfA it
-  // reports (infinite lights: pdfW of the direction). uPick chooses among several preimages (e.g. the
-  // triangle picked through a CDF). nullopt: no inverse (the default) or pLight cannot be sampled.
+  // reports (infinite lights: pdfW of the direction; delta lights: 1, u = gamma.fill, which they do not
+  // read). nullopt: no inverse (the default) or pLight cannot be sampled.
   virtual std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight,
-                                                  float uPick) const {
-    (void)ref; (void)pLight; (void)nLight; (void)uPick;
+                                                  const InverseGamma& gamma) const {
+    (void)ref; (void)pLight; (void)nLight; (void)gamma;
     return std::nullopt;
   }
   // Consumes 4 numbers: uPos (2), uDir (2).
   virtual std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const = 0;
   // Inverse of sampleLe(): the (uPos, uDir) with which it emits a ray from pLight (normal nLight) in
-  // direction w. Same conventions as invertSampleLi.
+  // direction w. Same conventions as invertSampleLi (an unread uPos or uDir is gamma.fill, Jacobian 1).
   virtual std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w,
-                                                       float uPick) const {
-    (void)pLight; (void)nLight; (void)w; (void)uPick;
+                                                       const InverseGamma& gamma) const {
+    (void)pLight; (void)nLight; (void)w; (void)gamma;
     return std::nullopt;
   }
   // Densities of an emitted ray leaving pLight (normal nLight) in direction w.
