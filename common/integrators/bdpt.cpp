@@ -297,7 +297,8 @@ float misWeight(const RenderScene& scene, Vertex* light, int s, Vertex* camera, 
 }
 
 TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source, int s, int t,
-                                  MisHeuristic heuristic, BdptWorkspace& ws, const Vec2* pixel) {
+                                  MisHeuristic heuristic, BdptWorkspace& ws, const Vec2* pixel,
+                                  Vertex* sampledOut) {
   TechniqueSample r;
   if (t < 1 || s < 0 || s + t < 2) return r;
   ws.reserve(t, std::max(s, 1));
@@ -312,6 +313,7 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
   r.C = C;
   r.pRaster = pRaster;
   r.weight = misWeight(scene, ws.light.data(), s, ws.camera.data(), t, sampled, heuristic);
+  if (sampledOut) *sampledOut = sampled;
   return r;
 }
 

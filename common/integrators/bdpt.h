@@ -118,7 +118,10 @@ struct TechniqueSample {
   float weight = 0;
   Vec2 pRaster;
 };
+// sampledOut (optional): receives the resampled endpoint (s = 1: the light vertex; t = 1: the lens vertex),
+// which with ws.camera[0, t) and ws.light[0, s) is the whole path (reversible-jump MLT reads it).
 TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source, int s, int t,
-                                  MisHeuristic heuristic, BdptWorkspace& ws, const Vec2* pixel = nullptr);
+                                  MisHeuristic heuristic, BdptWorkspace& ws, const Vec2* pixel = nullptr,
+                                  Vertex* sampledOut = nullptr);
 
 }  // namespace mlt
