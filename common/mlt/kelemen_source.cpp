@@ -139,6 +139,19 @@ void KelemenSource::reject() {
 }
 
 float KelemenSource::read(int stream, int index) { return readImpl(stream, index); }
+
+void KelemenSource::write(int stream, int index, float value) {
+  std::vector<Coord>& v = coords_[stream];
+  Coord& c = static_cast<size_t>(index) < v.size() ? v[index] : grow(stream, index);
+  if (c.modify != iteration_) {
+    c.backupValue = c.value;
+    c.backupModify = c.modify;
+    if (nTouched_ == touched_.size()) touched_.resize(2 * touched_.size());
+    touched_[nTouched_++] = {stream, index};
+  }
+  c.value = value;
+  c.modify = iteration_;
+}
 // The common cases without a call (no registers to save), exactly as readImpl() treats them: a coordinate
 // already current; in a small step, one that was current in the previous iteration (one step); in a
 // large step, any coordinate read before (a fresh uniform).

@@ -71,6 +71,10 @@ class KelemenSource final : public SampleSource {
 
   // Current value of a coordinate (applies pending mutations, exactly like next1D()).
   float read(int stream, int index);
+  // Reversible jumps (Bitterli et al. 2017): sets a coordinate in the current iteration, recorded on the
+  // touched list like a read so that reject() restores it exactly. A jump's iteration (started as a
+  // small step) writes every coordinate its target reads, so none of them is lazily mutated.
+  void write(int stream, int index, float value);
   // The committed vector of one stream as stored (for tests: no pending mutations are applied).
   std::vector<float> storedValues(int stream) const;
   const KelemenParams& params() const { return params_; }
@@ -113,13 +117,9 @@ class KelemenSource final : public SampleSource {
   int64_t uniformAfter_;    // exponential kernel: after this many steps the offset is uniform to 2^-30
 };
 
-// ---- Room for what comes next (interfaces only; not implemented yet) ------------------------------
-// Reversible-jump MLT (Bitterli et al. 2017) needs a sample source whose coordinates can be *written*:
-// a path is inverted into the numbers that reproduce it, and a vertex's fixed block (see the dimension
-// map in sample_source.h) is rewritten alone. A writable Kelemen source would add
-//   void write(int stream, int index, float value);   // recorded on the touched list like a read
-// so that reject() still restores exactly, and the jump supplies its own T-ratio * |Jacobian| to the chain
-// loop (chain.h: Proposal::tRatio). Veach's path-space MLT keeps a path, not numbers: its state
-// implements ChainState (chain.h) directly with sampleSource() == nullptr.
+// ---- Reversible jumps and path-space chains ---------------------------------------------------------
+// Reversible-jump MLT (common/methods/rjmlt/) writes a path's inverted numbers with write() and supplies
+// its own T-ratio * |Jacobian| to the chain loop (chain.h: Proposal::tRatio). Veach's path-space MLT keeps
+// a path, not numbers: its state implements ChainState (chain.h) directly.
 
 }  // namespace mlt

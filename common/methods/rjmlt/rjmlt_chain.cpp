@@ -1,0 +1,106 @@
+// Reversible-jump MLT's chain state (see rjmlt_chain.h).
+#include "common/methods/rjmlt/rjmlt_chain.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "common/mlt/method_target.h"
+#include "common/render/render_scene.h"
+
+namespace mlt {
+
+RjmltState::RjmltState(const RenderScene& scene, KelemenSource& source, int pathLength, MisHeuristic heuristic,
+                       const RjmltSettings& settings, Pcg32 moves)
+    : scene_(scene), source_(source), k_(pathLength), n_(mmltTechniqueCount(pathLength)), heuristic_(heuristic),
+      settings_(settings), moves_(moves) {
+  if (k_ < 1) throw std::invalid_argument("rjmlt: path length " + std::to_string(k_) + " must be >= 1");
+  if (!(settings.largeStepProb >= 0 && settings.techniqueProb >= 0 &&
+        settings.largeStepProb + settings.techniqueProb <= 1))
+    throw std::invalid_argument("rjmlt: large-step and technique probabilities must be >= 0 and sum to <= 1");
+  ws_.reserve(k_ + 2, k_ + 1);
+}
+
+void RjmltState::trace(int s, PathContribution& out) {
+  out.clear();
+  proposedValid_ = traceTechnique(scene_, source_, s, k_ + 1 - s, heuristic_, ws_, &proposed_);
+  if (!proposedValid_) return;
+  // MMLT's target (method_target.h): C(s,t) w(s,t) n, so that the uniform technique choice sums to bdpt.
+  const float w = proposed_.weight * float(n_);
+  if (!(w > 0)) return;
+  Splat sp;
+  sp.pRaster = proposed_.pRaster;
+  sp.L = proposed_.C * w;
+  sp.s = static_cast<int16_t>(s);
+  sp.t = static_cast<int16_t>(k_ + 1 - s);
+  out.splats.push_back(sp);
+}
+
+double RjmltState::start(PathContribution& out) {
+  sProposed_ = mmltTechniqueOf(source_, k_);
+  kind_ = kRjmltSmall;
+  jumpFailed_ = false;
+  trace(sProposed_, out);
+  accept();
+  double c = 0;
+  for (const Splat& sp : out.splats) c += luminance(sp.L);
+  return c;
+}
+
+Proposal RjmltState::propose() {
+  const double r = moves_.uniformDouble();
+  jumpFailed_ = false;
+  if (r < settings_.largeStepProb) {
+    kind_ = kRjmltLarge;
+    source_.startIteration(MutationType::Large);
+    sProposed_ = mmltTechniqueOf(source_, k_);  // a fresh uniform, as MMLT's large step draws it
+    return {kRjmltLarge, 1.0, true};
+  }
+  if (r < settings_.largeStepProb + settings_.techniqueProb && n_ > 1) {
+    kind_ = kRjmltTechnique;
+    source_.startIteration(MutationType::Small);  // no coordinate is mutated: the jump writes all it reads
+    const int j = (s_ + 1 + std::min(n_ - 2, static_cast<int>(moves_.uniform() * float(n_ - 1)))) % n_;
+    sProposed_ = j;
+    std::optional<PathInverse> inv, cur;
+    if (currentValid_) {
+      inv = invertTechnique(scene_, current_.z, j, k_ + 1 - j, moves_);
+      cur = invertTechnique(scene_, current_.z, s_, k_ + 1 - s_, moves_);
+    }
+    if (!inv || !cur) {
+      jumpFailed_ = true;
+      ++inversionFailures_;
+      return {kRjmltTechnique, 0.0, false};
+    }
+    for (const PrimaryWrite& w : inv->writes) source_.write(w.stream, w.index, w.value);
+    // Eq. 38 with T(i->j) = T(j->i): tRatio = |J[S_j^-1](z)| / |J[S_i^-1](z)|.
+    return {kRjmltTechnique, settings_.dropJacobian ? 1.0 : inv->jacobian / cur->jacobian, false};
+  }
+  kind_ = kRjmltSmall;
+  source_.startIteration(MutationType::Small);
+  sProposed_ = s_;
+  return {kRjmltSmall, 1.0, false};
+}
+
+void RjmltState::evaluate(PathContribution& out) {
+  out.clear();
+  if (jumpFailed_) {
+    proposedValid_ = false;
+    return;
+  }
+  trace(sProposed_, out);
+  if (kind_ == kRjmltTechnique && !out.splats.empty() && !samePath(scene_, current_.z, proposed_.z)) {
+    out.clear();  // the numbers did not reproduce the path: reject (never abort)
+    ++retraceFailures_;
+  }
+}
+
+void RjmltState::accept() {
+  source_.accept();
+  s_ = sProposed_;
+  std::swap(current_, proposed_);
+  currentValid_ = proposedValid_;
+}
+
+void RjmltState::reject() { source_.reject(); }
+
+}  // namespace mlt

@@ -1,0 +1,79 @@
+// Reversible-jump MLT's chain state (Bitterli et al. 2017, sec. 4-6) on top of the MMLT state of one path
+// length k: a KelemenSource (the primary samples) and the bdpt technique (s, t), kept apart from the
+// samples (small steps never change the technique). Three proposal kinds (chain.h: Proposal::kind):
+//   "large"      (p_large)      every coordinate redrawn and the technique chosen uniformly: MMLT's
+//                               independent proposal (its c(y) samples b, as MMLT's large steps do);
+//   "small"      (rest)         Kelemen small step of the samples, same technique;
+//   "technique"  (p_technique)  the reversible jump: the current path z is kept, a technique j != i is
+//                               chosen uniformly (T(i->j) = T(j->i) = 1/(n-1)), the samples become
+//                               S_j^-1(z, gamma) (path_inversion.h) and the chain loop accepts with
+//                               eq. 38:  a = min(1, |J[S_j^-1](z)| C_j(v) / (|J[S_i^-1](z)| C_i(u))),
+//                               i.e. Proposal::tRatio = J_j / J_i and c = the MMLT target. In exact
+//                               arithmetic this is w_j / w_i (eq. 33).
+// A jump whose inversion fails, or whose re-traced path is not the same path (numerical failure, sec. 6
+// "final algorithm"), is rejected: c(y) = 0. The target (ChainTarget) is the same object: it traces the
+// technique of the proposal, so MMLT's target value C w n is reproduced for every state.
+#pragma once
+#include <cstdint>
+#include <optional>
+
+#include "common/core/rng.h"
+#include "common/integrators/bdpt.h"
+#include "common/methods/rjmlt/path_inversion.h"
+#include "common/mlt/chain.h"
+#include "common/mlt/kelemen_source.h"
+
+namespace mlt {
+
+class RenderScene;
+
+struct RjmltSettings {
+  double largeStepProb = 0.1;   // the defaults: large / small / technique = 10 / 85 / 5 %
+  double techniqueProb = 0.05;
+  bool dropJacobian = false;    // tests only: Figure 3b's mistake (tRatio = 1), to show the tests can fail
+};
+
+// Mutation kinds of rjmlt (indices into rjmltKindNames).
+enum RjmltKind : int { kRjmltLarge = 0, kRjmltSmall = 1, kRjmltTechnique = 2 };
+inline constexpr const char* rjmltKindNames[] = {"large", "small", "technique"};
+
+class RjmltState final : public ChainState, public ChainTarget {
+ public:
+  // source: the chain's KelemenSource at iteration 0 (replaying its start candidate); moves: the chain's
+  // stream for move decisions and inversion numbers gamma.
+  RjmltState(const RenderScene& scene, KelemenSource& source, int pathLength, MisHeuristic heuristic,
+             const RjmltSettings& settings, Pcg32 moves);
+
+  // Evaluates the start state (technique from Connect[kConnectTechniqueDim], as MMLT's target reads it)
+  // and commits it. Returns its target value c.
+  double start(PathContribution& out);
+
+  Proposal propose() override;
+  void accept() override;
+  void reject() override;
+  void evaluate(PathContribution& out) override;
+
+  int technique() const { return s_; }  // current s (t = k + 1 - s)
+  // Jumps refused before evaluation (inversion failed) and after (the re-traced path differs).
+  uint64_t inversionFailures() const { return inversionFailures_; }
+  uint64_t retraceFailures() const { return retraceFailures_; }
+
+ private:
+  void trace(int s, PathContribution& out);
+
+  const RenderScene& scene_;
+  KelemenSource& source_;
+  int k_, n_;
+  MisHeuristic heuristic_;
+  RjmltSettings settings_;
+  Pcg32 moves_;
+  BdptWorkspace ws_;
+  int s_ = 0, sProposed_ = 0;
+  int kind_ = kRjmltSmall;
+  bool jumpFailed_ = false;
+  MmltPath current_, proposed_;
+  bool currentValid_ = false, proposedValid_ = false;
+  uint64_t inversionFailures_ = 0, retraceFailures_ = 0;
+};
+
+}  // namespace mlt
