@@ -196,4 +196,37 @@ SceneDesc cornellBoxPointSpot(int width, int height) {
   return s;
 }
 
+SceneDesc twoLightsReflector(int width, int height) {
+  SceneDesc s = cornellShell(width, height);
+  s.meshes.push_back(boxMesh("block", 0, Vec3(0.35f, -0.6f, 0.3f), Vec3(0.3f, 0.4f, 0.3f), 0.3f));
+  const int black = addDiffuse(s, Color(0.0f), "light");
+  const float H = 0.8f, y = 0.99f;
+  MeshDesc panel = quadMesh("panel", black, {-H, y, -H}, {H, y, -H}, {H, y, H}, {-H, y, H}, Vec3(0, 0, 0));
+  panel.emission = Color(0.5f);
+  s.meshes.push_back(panel);
+  // The small light faces down at (cx, yl, cz); the cup's mirror walls reach 0.15 below it.
+  const float cx = -0.7f, cz = 0.6f, yl = 0.97f, h = 0.04f, r = 0.08f, depth = 0.15f;
+  MeshDesc bulb = quadMesh("bulb", black, {cx - h, yl, cz - h}, {cx + h, yl, cz - h}, {cx + h, yl, cz + h},
+                           {cx - h, yl, cz + h}, Vec3(cx, 0, cz));
+  bulb.emission = Color(400.0f);
+  s.meshes.push_back(bulb);
+  BsdfDesc mirror;
+  mirror.type = BsdfDesc::Type::Conductor;
+  mirror.id = "reflector";
+  mirror.mirror = true;
+  s.bsdfs.push_back(mirror);
+  const int mirrorId = int(s.bsdfs.size()) - 1;
+  MeshDesc cup;
+  cup.name = "reflector";
+  cup.bsdf = mirrorId;
+  const Vec3 inside(cx, yl - depth / 2, cz);
+  const float y0 = yl + 0.005f, y1 = yl - depth;
+  addQuad(cup, {cx - r, y0, cz - r}, {cx + r, y0, cz - r}, {cx + r, y1, cz - r}, {cx - r, y1, cz - r}, inside);
+  addQuad(cup, {cx - r, y0, cz + r}, {cx + r, y0, cz + r}, {cx + r, y1, cz + r}, {cx - r, y1, cz + r}, inside);
+  addQuad(cup, {cx - r, y0, cz - r}, {cx - r, y0, cz + r}, {cx - r, y1, cz + r}, {cx - r, y1, cz - r}, inside);
+  addQuad(cup, {cx + r, y0, cz - r}, {cx + r, y0, cz + r}, {cx + r, y1, cz + r}, {cx + r, y1, cz - r}, inside);
+  s.meshes.push_back(cup);
+  return s;
+}
+
 }  // namespace mlt::test

@@ -214,6 +214,13 @@ std::optional<PathInverse> invertTechnique(const RenderScene& scene, const std::
   return out;
 }
 
+bool connectsAtDelta(const std::vector<Vertex>& z, int s, int t) {
+  if (s == 0) return false;
+  auto delta = [](const Vertex& v) { return v.type == VertexType::Surface && v.bsdf && v.bsdf->isDelta(); };
+  const int k = static_cast<int>(z.size()) - 1;
+  return delta(z[t - 1]) || delta(z[k - s + 1]);
+}
+
 bool samePath(const RenderScene& scene, const std::vector<Vertex>& a, const std::vector<Vertex>& b, float tolerance) {
   if (a.size() != b.size()) return false;
   const float tolP = tolerance * std::fmax(1.0f, scene.radius());

@@ -75,6 +75,9 @@ int mmltFootprint(int k, Stream stream);
 std::optional<PathInverse> invertTechnique(const RenderScene& scene, const std::vector<Vertex>& z, int s, int t,
                                            Pcg32& rng);
 
+// True if technique (s, t) connects the path at a Dirac vertex (its contribution is zero by construction).
+bool connectsAtDelta(const std::vector<Vertex>& z, int s, int t);
+
 // True if two paths have the same vertices (positions to `tolerance` relative to the scene radius;
 // vertices at infinity by direction).
 bool samePath(const RenderScene& scene, const std::vector<Vertex>& a, const std::vector<Vertex>& b,

@@ -59,21 +59,56 @@ Proposal RjmltState::propose() {
   if (r < settings_.largeStepProb + settings_.techniqueProb && n_ > 1) {
     kind_ = kRjmltTechnique;
     source_.startIteration(MutationType::Small);  // no coordinate is mutated: the jump writes all it reads
-    const int j = (s_ + 1 + std::min(n_ - 2, static_cast<int>(moves_.uniform() * float(n_ - 1)))) % n_;
-    sProposed_ = j;
     std::optional<PathInverse> inv, cur;
-    if (currentValid_) {
+    double tForward = 1, tBackward = 1;  // T(i->j), T(j->i)
+    int j = s_;
+    if (currentValid_ && settings_.proposal == TechniqueProposal::Uniform) {
+      j = (s_ + 1 + std::min(n_ - 2, static_cast<int>(moves_.uniform() * float(n_ - 1)))) % n_;
       inv = invertTechnique(scene_, current_.z, j, k_ + 1 - j, moves_);
       cur = invertTechnique(scene_, current_.z, s_, k_ + 1 - s_, moves_);
+    } else if (currentValid_) {
+      // T(i->j) = w~_j(z) = J_j^2 / sum_m J_m^2 over the techniques that can produce z (power heuristic).
+      invs_.assign(n_, std::nullopt);
+      weights_.assign(n_, 0.0);
+      double maxJ = 0;
+      for (int m = 0; m < n_; ++m) {
+        if (connectsAtDelta(current_.z, m, k_ + 1 - m) && m != s_) continue;
+        invs_[m] = invertTechnique(scene_, current_.z, m, k_ + 1 - m, moves_);
+        if (invs_[m]) maxJ = std::max(maxJ, invs_[m]->jacobian);
+      }
+      double sum = 0;
+      for (int m = 0; m < n_; ++m)
+        if (invs_[m] && maxJ > 0 && !connectsAtDelta(current_.z, m, k_ + 1 - m)) {
+          const double r = invs_[m]->jacobian / maxJ;
+          weights_[m] = r * r;
+          sum += weights_[m];
+        }
+      if (sum > 0 && weights_[s_] > 0) {
+        double u = moves_.uniformDouble() * sum;
+        j = -1;
+        for (int m = 0; m < n_; ++m) {
+          if (!(weights_[m] > 0)) continue;
+          j = m;
+          if (u < weights_[m]) break;
+          u -= weights_[m];
+        }
+        tForward = weights_[j] / sum;
+        tBackward = weights_[s_] / sum;
+        inv = std::move(invs_[j]);
+        cur = j == s_ ? inv : std::move(invs_[s_]);
+      }
     }
+    sProposed_ = j;
+    if (j != s_) ++changesProposed_;
     if (!inv || !cur) {
       jumpFailed_ = true;
       ++inversionFailures_;
       return {kRjmltTechnique, 0.0, false};
     }
     for (const PrimaryWrite& w : inv->writes) source_.write(w.stream, w.index, w.value);
-    // Eq. 38 with T(i->j) = T(j->i): tRatio = |J[S_j^-1](z)| / |J[S_i^-1](z)|.
-    return {kRjmltTechnique, settings_.dropJacobian ? 1.0 : inv->jacobian / cur->jacobian, false};
+    // Eq. 38: tRatio = T(j->i) |J[S_j^-1](z)| / (T(i->j) |J[S_i^-1](z)|).
+    const double jacobianRatio = settings_.dropJacobian ? 1.0 : inv->jacobian / cur->jacobian;
+    return {kRjmltTechnique, tBackward / tForward * jacobianRatio, false};
   }
   kind_ = kRjmltSmall;
   source_.startIteration(MutationType::Small);
@@ -95,6 +130,7 @@ void RjmltState::evaluate(PathContribution& out) {
 }
 
 void RjmltState::accept() {
+  if (kind_ == kRjmltTechnique && sProposed_ != s_) ++changesAccepted_;
   source_.accept();
   s_ = sProposed_;
   std::swap(current_, proposed_);

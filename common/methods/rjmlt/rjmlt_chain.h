@@ -4,18 +4,24 @@
 //   "large"      (p_large)      every coordinate redrawn and the technique chosen uniformly: MMLT's
 //                               independent proposal (its c(y) samples b, as MMLT's large steps do);
 //   "small"      (rest)         Kelemen small step of the samples, same technique;
-//   "technique"  (p_technique)  the reversible jump: the current path z is kept, a technique j != i is
-//                               chosen uniformly (T(i->j) = T(j->i) = 1/(n-1)), the samples become
-//                               S_j^-1(z, gamma) (path_inversion.h) and the chain loop accepts with
-//                               eq. 38:  a = min(1, |J[S_j^-1](z)| C_j(v) / (|J[S_i^-1](z)| C_i(u))),
-//                               i.e. Proposal::tRatio = J_j / J_i and c = the MMLT target. In exact
-//                               arithmetic this is w_j / w_i (eq. 33).
+//   "technique"  (p_technique)  the reversible jump: the current path z is kept, a technique j is chosen
+//                               with T(i->j), the samples become S_j^-1(z, gamma) (path_inversion.h)
+//                               and the chain loop accepts with eq. 38:
+//                                 a = min(1, T(j->i) |J[S_j^-1](z)| C_j(v) / (T(i->j) |J[S_i^-1](z)| C_i(u))),
+//                               i.e. Proposal::tRatio = T(j->i) J_j / (T(i->j) J_i), c = the MMLT target.
+//                               C_j J_j = f for every technique, so a = T(j->i) w_j / (T(i->j) w_i) (eq. 33).
+//                               Proposals: MisWeight (default, the paper's sec. 4 choice): T(i->j) =
+//                               w~_j(z), the power-heuristic weight computed from the Jacobians of every
+//                               technique that can produce z (0 where a technique cannot, or connects at a
+//                               Dirac vertex); j = i is allowed (it resamples the ambiguous coordinates).
+//                               Then a ~ 1. Uniform: j != i uniformly, a = min(1, w_j / w_i).
 // A jump whose inversion fails, or whose re-traced path is not the same path (numerical failure, sec. 6
 // "final algorithm"), is rejected: c(y) = 0. The target (ChainTarget) is the same object: it traces the
 // technique of the proposal, so MMLT's target value C w n is reproduced for every state.
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "common/core/rng.h"
 #include "common/integrators/bdpt.h"
@@ -27,9 +33,12 @@ namespace mlt {
 
 class RenderScene;
 
+enum class TechniqueProposal { MisWeight, Uniform };
+
 struct RjmltSettings {
   double largeStepProb = 0.1;   // the defaults: large / small / technique = 10 / 85 / 5 %
   double techniqueProb = 0.05;
+  TechniqueProposal proposal = TechniqueProposal::MisWeight;
   bool dropJacobian = false;    // tests only: Figure 3b's mistake (tRatio = 1), to show the tests can fail
 };
 
@@ -57,6 +66,9 @@ class RjmltState final : public ChainState, public ChainTarget {
   // Jumps refused before evaluation (inversion failed) and after (the re-traced path differs).
   uint64_t inversionFailures() const { return inversionFailures_; }
   uint64_t retraceFailures() const { return retraceFailures_; }
+  // Jumps to a technique other than the current one (the MisWeight proposal may pick the current one).
+  uint64_t changesProposed() const { return changesProposed_; }
+  uint64_t changesAccepted() const { return changesAccepted_; }
 
  private:
   void trace(int s, PathContribution& out);
@@ -72,8 +84,10 @@ class RjmltState final : public ChainState, public ChainTarget {
   int kind_ = kRjmltSmall;
   bool jumpFailed_ = false;
   MmltPath current_, proposed_;
+  std::vector<std::optional<PathInverse>> invs_;  // scratch of the MisWeight proposal
+  std::vector<double> weights_;
   bool currentValid_ = false, proposedValid_ = false;
-  uint64_t inversionFailures_ = 0, retraceFailures_ = 0;
+  uint64_t inversionFailures_ = 0, retraceFailures_ = 0, changesProposed_ = 0, changesAccepted_ = 0;
 };
 
 }  // namespace mlt
