@@ -42,6 +42,12 @@ class AreaLight final : public Light {
   // Inverse of samplePoint: the u that lands on p (the triangle found by search), or nullopt if p is on
   // no triangle of the mesh.
   std::optional<Vec2> invertPoint(const Vec3& p) const;
+  // A uniform grid over the mesh for invertPoint: cell -> triangles whose (slightly expanded) bounds
+  // overlap it, in CSR form. Built once in the constructor.
+  void buildGrid();
+  Bounds3 gridBounds_;
+  int gridRes_[3] = {1, 1, 1};
+  std::vector<uint32_t> cellStart_, cellTris_;
 
   std::vector<Vec3> v_;        // 3 vertices per triangle
   std::vector<Vec3> ng_;       // unit geometric normal per triangle
@@ -83,6 +89,61 @@ AreaLight::AreaLight(const MeshDesc& mesh) {
   for (double& c : cdf_) c /= total;
   cdf_.back() = 1.0;
   area_ = static_cast<float>(total);
+  buildGrid();
+}
+
+void AreaLight::buildGrid() {
+  const size_t nTri = ng_.size();
+  for (const Vec3& p : v_) gridBounds_.expand(p);
+  const Vec3 ext = gridBounds_.hi - gridBounds_.lo;
+  const float diag = length(ext), pad = 1e-4f * std::fmax(diag, 1e-6f);
+  gridBounds_.lo = gridBounds_.lo - Vec3(pad);
+  gridBounds_.hi = gridBounds_.hi + Vec3(pad);
+  // About 2 triangles per occupied cell: res ~ (T / 2)^(1/d) along the d axes that have extent.
+  const Vec3 size = gridBounds_.hi - gridBounds_.lo;
+  const float maxSide = std::fmax(size.x, std::fmax(size.y, size.z));
+  int dimsWithExtent = 0;
+  for (int a = 0; a < 3; ++a) dimsWithExtent += size[a] > 0.05f * maxSide;
+  const double perAxis = std::pow(std::max(1.0, double(nTri) / 2), 1.0 / std::max(1, dimsWithExtent));
+  for (int a = 0; a < 3; ++a)
+    gridRes_[a] = size[a] > 0.05f * maxSide ? std::clamp(int(perAxis * size[a] / maxSide + 0.5), 1, 128) : 1;
+  auto cellRange = [&](const Bounds3& b, int lo[3], int hi[3]) {
+    for (int a = 0; a < 3; ++a) {
+      const float t0 = (b.lo[a] - gridBounds_.lo[a]) / size[a], t1 = (b.hi[a] - gridBounds_.lo[a]) / size[a];
+      lo[a] = std::clamp(int(t0 * gridRes_[a]), 0, gridRes_[a] - 1);
+      hi[a] = std::clamp(int(t1 * gridRes_[a]), 0, gridRes_[a] - 1);
+    }
+  };
+  const size_t nCells = size_t(gridRes_[0]) * gridRes_[1] * gridRes_[2];
+  std::vector<uint32_t> count(nCells + 1, 0);
+  std::vector<Bounds3> triBounds(nTri);
+  for (size_t i = 0; i < nTri; ++i) {
+    Bounds3 b;
+    for (int k = 0; k < 3; ++k) b.expand(v_[3 * i + k]);
+    const float triPad = 2e-4f * length(b.hi - b.lo) + pad;
+    b.lo = b.lo - Vec3(triPad);
+    b.hi = b.hi + Vec3(triPad);
+    triBounds[i] = b;
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      cellStart_.assign(nCells + 1, 0);
+      for (size_t c = 0; c < nCells; ++c) cellStart_[c + 1] = cellStart_[c] + count[c];
+      cellTris_.assign(cellStart_[nCells], 0);
+      std::fill(count.begin(), count.end(), 0);
+    }
+    for (size_t i = 0; i < nTri; ++i) {
+      int lo[3], hi[3];
+      cellRange(triBounds[i], lo, hi);
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            const size_t c = (size_t(z) * gridRes_[1] + y) * gridRes_[0] + x;
+            if (pass == 1) cellTris_[cellStart_[c] + count[c]] = uint32_t(i);
+            ++count[c];
+          }
+    }
+  }
 }
 
 // Picks a triangle with probability area_i / A using u.x, remaps u.x to [0,1) within the chosen interval
@@ -152,7 +213,16 @@ std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
   const size_t nTri = ng_.size();
   size_t best = nTri;
   double bestErr = 0, bestB0 = 0, bestB1 = 0;
-  for (size_t i = 0; i < nTri; ++i) {
+  // The grid cell of p lists every triangle whose expanded bounds contain p.
+  size_t cell = 0;
+  for (int a = 2; a >= 0; --a) {
+    const float extent = gridBounds_.hi[a] - gridBounds_.lo[a];
+    const float t = extent > 0 ? (p[a] - gridBounds_.lo[a]) / extent : 0.0f;
+    if (!(t >= 0 && t <= 1)) return std::nullopt;  // off the mesh's bounds
+    cell = cell * gridRes_[a] + std::clamp(int(t * gridRes_[a]), 0, gridRes_[a] - 1);
+  }
+  for (uint32_t ci = cellStart_[cell]; ci < cellStart_[cell + 1]; ++ci) {
+    const size_t i = cellTris_[ci];
     const Vec3* v = &v_[3 * i];
     const double e0[3] = {double(v[1].x) - v[0].x, double(v[1].y) - v[0].y, double(v[1].z) - v[0].z};
     const double e1[3] = {double(v[2].x) - v[0].x, double(v[2].y) - v[0].y, double(v[2].z) - v[0].z};
