@@ -63,14 +63,6 @@ double offsetSensitivity(const std::vector<Vertex>& z) {
   return worst;
 }
 
-// True if technique (s, t) of this path connects at a Dirac vertex (its contribution is zero by design).
-bool connectsAtDelta(const std::vector<Vertex>& z, int s, int t) {
-  const int k = static_cast<int>(z.size()) - 1;
-  auto delta = [](const Vertex& v) { return v.type == VertexType::Surface && v.bsdf->isDelta(); };
-  if (s == 0) return false;
-  return delta(z[t - 1]) || delta(z[k - s + 1]);
-}
-
 TEST(RjmltPathInversion, EveryTechniqueReproducesThePathAndItsDensity) {
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);
