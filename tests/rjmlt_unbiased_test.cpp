@@ -80,7 +80,7 @@ double targetValue(const PathContribution& pc) {
 
 struct RjResult {
   Estimate estimate;
-  uint64_t jumpsProposed = 0, jumpsAccepted = 0;
+  uint64_t jumpsProposed = 0, jumpsAccepted = 0, inversionFailures = 0, retraceFailures = 0;
 };
 
 RjResult rjmltLength(const RenderScene& scene, int k, int bootstrap, int chains, int mutations) {
@@ -126,6 +126,8 @@ RjResult rjmltLength(const RenderScene& scene, int k, int bootstrap, int chains,
     (void)counts;
     r.jumpsProposed += state.changesProposed();
     r.jumpsAccepted += state.changesAccepted();
+    r.inversionFailures += state.inversionFailures();
+    r.retraceFailures += state.retraceFailures();
     std::vector<double> est(T);
     for (int t = 0; t < T; ++t) est[t] = b * sink.tile[t] / mutations;
     perChain.push_back(est);
@@ -200,10 +202,11 @@ void checkScene(const std::string& name, const SceneDesc& desc, const std::vecto
     const double zTotal = (totRj - totRef) / std::sqrt(varRef + varRj + 1e-30);
     const auto [mp, ma] = mmltTechniqueSmallSteps(*scene, k, 20000);
     std::printf("[ %-16s k=%d ] bdpt %.5g  rjmlt %.5g  (z %.2f, worst tile |z| %.2f); technique changes accepted: "
-                "rjmlt %.3f (%llu jumps), mmlt small steps %.3f (%llu)\n",
+                "rjmlt %.3f (%llu jumps; refused: %llu inversions, %llu re-traces), mmlt small steps %.3f (%llu)\n",
                 name.c_str(), k, totRef, totRj, zTotal, worst,
                 double(rj.jumpsAccepted) / double(std::max<uint64_t>(1, rj.jumpsProposed)),
-                (unsigned long long)rj.jumpsProposed, double(ma) / double(std::max<uint64_t>(1, mp)),
+                (unsigned long long)rj.jumpsProposed, (unsigned long long)rj.inversionFailures,
+                (unsigned long long)rj.retraceFailures, double(ma) / double(std::max<uint64_t>(1, mp)),
                 (unsigned long long)mp);
     EXPECT_LT(std::fabs(zTotal), 4.0);
     EXPECT_LT(worst, 4.5);  // 16 tiles: P(max |z| > 4.5) < 1e-4 for correct estimators

@@ -120,7 +120,10 @@ void AreaLight::buildGrid() {
   for (size_t i = 0; i < nTri; ++i) {
     Bounds3 b;
     for (int k = 0; k < 3; ++k) b.expand(v_[3 * i + k]);
-    const float triPad = 2e-4f * length(b.hi - b.lo) + pad;
+    const float maxAbs = std::fmax(std::fmax(std::fabs(b.lo.x), std::fabs(b.hi.x)),
+                                   std::fmax(std::fmax(std::fabs(b.lo.y), std::fabs(b.hi.y)),
+                                             std::fmax(std::fabs(b.lo.z), std::fabs(b.hi.z))));
+    const float triPad = 2e-4f * length(b.hi - b.lo) + 2e-6f * maxAbs + pad;  // covers invertPoint's tolerance
     b.lo = b.lo - Vec3(triPad);
     b.hi = b.hi + Vec3(triPad);
     triBounds[i] = b;
@@ -235,7 +238,10 @@ std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
     const double size = std::sqrt(std::max(d00, d11));
     const double n[3] = {double(ng_[i].x), double(ng_[i].y), double(ng_[i].z)};
     const double off = std::fabs(dt(d, n));
-    const double err = off / size + std::max({0.0, -b0, -b1, -b2});
+    // Distance off the triangle relative to its size, over what float coordinates of p's magnitude allow
+    // (a tiny triangle far from the origin: 0.002 wide at |p| = 5 is 1.5e-4 of its size per float ulp).
+    const double maxAbs = std::max({std::fabs(double(p.x)), std::fabs(double(p.y)), std::fabs(double(p.z))});
+    const double err = (off / size + std::max({0.0, -b0, -b1, -b2})) / (1e-4 + 1e-6 * maxAbs / size);
     if (best == nTri || err < bestErr) {
       best = i;
       bestErr = err;
@@ -243,7 +249,7 @@ std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
       bestB1 = b1;
     }
   }
-  if (best == nTri || !(bestErr <= 1e-4)) return std::nullopt;
+  if (best == nTri || !(bestErr <= 1)) return std::nullopt;
   const Vec2 ut = invertUniformTriangle(std::clamp(bestB0, 0.0, 1.0), std::clamp(bestB1, 0.0, 1.0));
   const double lo = cdf_[best], hi = cdf_[best + 1];
   if (!(hi > lo)) return std::nullopt;

@@ -37,8 +37,8 @@ int lightIndexOf(const RenderScene& scene, const Vertex& v) {
 
 // The BSDF sample at v from prev toward next, inverted into the block at `base` of `vals`; returns the
 // Jacobian in the measure of next, or 0 if the BSDF cannot produce that direction.
-double invertBounce(const Vertex* prev, const Vertex& v, const Vertex& next, TransportMode mode, Pcg32& rng,
-                    float* block) {
+double invertBounce(const Vertex* prev, bool prevIsEndpoint, const Vertex& v, const Vertex& next, TransportMode mode,
+                    Pcg32& rng, float* block) {
   if (v.type != VertexType::Surface || !v.bsdf || !prev) return 0;
   const Frame frame(v.ns);
   // The forward walk traces from v.p offset along ng (offsetRayOrigin): aim from there, so that the
@@ -53,7 +53,11 @@ double invertBounce(const Vertex* prev, const Vertex& v, const Vertex& next, Tra
     wi = d / float(std::sqrt(d2));
     toNext = (next.isOnSurface() ? absDot(next.ng, wi) : 1.0) / d2;
   }
-  const Vec3 woL = frame.toLocal(unitTo(v, *prev)), wiL = frame.toLocal(wi);
+  // Likewise the ray that reached v left prev from its offset origin, unless prev is the subpath's
+  // endpoint (lens or light), whose rays start on the point itself.
+  Vec3 wo = unitTo(v, *prev);
+  if (!prevIsEndpoint && !prev->isInfiniteLight()) wo = normalize(offsetRayOrigin(prev->p, prev->ng, -wo) - v.p);
+  const Vec3 woL = frame.toLocal(wo), wiL = frame.toLocal(wi);
   const std::optional<BsdfSampleInverse> inv = v.bsdf->invertSample(woL, wiL, drawGamma(rng), BsdfQuery{v.uv, mode});
   if (!inv || !(inv->jacobian > 0)) return 0;
   block[0] = inv->uComponent;
@@ -139,7 +143,7 @@ std::optional<PathInverse> invertTechnique(const RenderScene& scene, const std::
     // raster numbers per steradian = jacobianRaster / (W H) = pdfDir; lens: pdfPos.
     J *= double(ci->lens.jacobian) * (double(ci->jacobianRaster) / (double(W) * H)) * toMeasureOf(z[0], z[1]);
     for (int m = 1; m <= t - 2; ++m) {
-      const double j = invertBounce(&z[m - 1], z[m], z[m + 1], TransportMode::Radiance, rng,
+      const double j = invertBounce(&z[m - 1], m == 1, z[m], z[m + 1], TransportMode::Radiance, rng,
                                     &cam[kCameraDims + (m - 1) * kBsdfDims]);
       if (!(j > 0)) return std::nullopt;
       J *= j;
@@ -198,7 +202,7 @@ std::optional<PathInverse> invertTechnique(const RenderScene& scene, const std::
       else
         J *= double(le->pos.jacobian) * le->dir.jacobian * toMeasureOf(end, next);
       for (int j = 1; j <= s - 2; ++j) {
-        const double jb = invertBounce(&z[k - j + 1], z[k - j], z[k - j - 1], TransportMode::Importance, rng,
+        const double jb = invertBounce(&z[k - j + 1], j == 1, z[k - j], z[k - j - 1], TransportMode::Importance, rng,
                                        &lig[kLightDims + (j - 1) * kBsdfDims]);
         if (!(jb > 0)) return std::nullopt;
         J *= jb;
