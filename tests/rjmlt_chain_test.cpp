@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "common/methods/rjmlt/rjmlt_chain.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
 

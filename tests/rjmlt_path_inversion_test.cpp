@@ -13,7 +13,7 @@
 #include <string>
 
 #include "common/methods/rjmlt/path_inversion.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/render/render_scene.h"
 #include "common/sampler/writable_source.h"
 #include "tests/support/test_scenes.h"

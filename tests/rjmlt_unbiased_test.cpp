@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "common/methods/rjmlt/rjmlt_chain.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
 #include "tests/support/test_scenes.h"
@@ -146,7 +146,7 @@ RjResult rjmltLength(const RenderScene& scene, int k, int bootstrap, int chains,
 std::pair<uint64_t, uint64_t> mmltTechniqueSmallSteps(const RenderScene& scene, int k, int steps) {
   IntegratorSettings integrator;
   integrator.maxDepth = k;
-  MethodTarget target(scene, Method::MMLT, integrator, false);
+  MmltTarget target(scene, integrator);
   uint64_t cand = 0;
   PathContribution x, y;
   for (;; ++cand) {

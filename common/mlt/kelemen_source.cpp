@@ -52,7 +52,8 @@ inline float wrap01(double v) {
 
 KelemenSource::KelemenSource(const KelemenParams& params, uint64_t jobSeed, uint64_t chainIndex,
                              uint64_t startCandidate)
-    : params_(params), candidate_(IndependentSource::candidate(jobSeed, startCandidate)), rng_(chainRng(jobSeed, chainIndex, 0)) {
+    : params_(params), jobSeed_(jobSeed), chainIndex_(chainIndex),
+      candidate_(IndependentSource::candidate(jobSeed, startCandidate)), rng_(chainRng(jobSeed, chainIndex, 0)) {
   if (!(params.largeStepProb >= 0 && params.largeStepProb <= 1))
     throw std::invalid_argument("KelemenSource: largeStepProb " + std::to_string(params.largeStepProb) +
                                 " is outside [0, 1]");

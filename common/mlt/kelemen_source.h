@@ -78,6 +78,8 @@ class KelemenSource final : public SampleSource {
   // The committed vector of one stream as stored (for tests: no pending mutations are applied).
   std::vector<float> storedValues(int stream) const;
   const KelemenParams& params() const { return params_; }
+  uint64_t jobSeed() const { return jobSeed_; }
+  uint64_t chainIndex() const { return chainIndex_; }
 
   // Small-step kernel applied n times to v (n >= 1), exposed for tests of lazy == eager.
   float mutate(float v, int64_t n);
@@ -99,6 +101,7 @@ class KelemenSource final : public SampleSource {
   float step(float v, uint32_t bits) const;  // one exponential-kernel step, offset from 32 random bits
 
   KelemenParams params_;
+  uint64_t jobSeed_ = 0, chainIndex_ = 0;
   IndependentSource candidate_;
   Pcg32 rng_;
   std::vector<Coord> coords_[kNumStreams];

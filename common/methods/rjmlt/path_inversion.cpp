@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "common/core/sampling_inverse.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/render/render_scene.h"
 
 namespace mlt {

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/mlt/method_target.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/render/render_scene.h"
 
 namespace mlt {
@@ -25,7 +25,7 @@ void RjmltState::trace(int s, PathContribution& out) {
   out.clear();
   proposedValid_ = traceTechnique(scene_, source_, s, k_ + 1 - s, heuristic_, ws_, &proposed_);
   if (!proposedValid_) return;
-  // MMLT's target (method_target.h): C(s,t) w(s,t) n, so that the uniform technique choice sums to bdpt.
+  // MMLT's target (methods/mmlt/mmlt_method.h): C(s,t) w(s,t) n, so that the uniform technique choice sums to bdpt.
   const float w = proposed_.weight * float(n_);
   if (!(w > 0)) return;
   Splat sp;
@@ -45,6 +45,12 @@ double RjmltState::start(PathContribution& out) {
   double c = 0;
   for (const Splat& sp : out.splats) c += luminance(sp.L);
   return c;
+}
+
+void RjmltState::adopt(const MmltPath& start, bool valid) {
+  s_ = start.s;
+  current_ = start;
+  currentValid_ = valid;
 }
 
 Proposal RjmltState::propose() {

@@ -56,6 +56,8 @@ class RjmltState final : public ChainState, public ChainTarget {
   // Evaluates the start state (technique from Connect[kConnectTechniqueDim], as MMLT's target reads it)
   // and commits it. Returns its target value c.
   double start(PathContribution& out);
+  // Takes over a start state that was already evaluated (by RjmltTarget) and accepted on the source.
+  void adopt(const MmltPath& start, bool valid);
 
   Proposal propose() override;
   void accept() override;
@@ -63,6 +65,7 @@ class RjmltState final : public ChainState, public ChainTarget {
   void evaluate(PathContribution& out) override;
 
   int technique() const { return s_; }  // current s (t = k + 1 - s)
+  int pathLength() const { return k_; }
   // Jumps refused before evaluation (inversion failed) and after (the re-traced path differs).
   uint64_t inversionFailures() const { return inversionFailures_; }
   uint64_t retraceFailures() const { return retraceFailures_; }

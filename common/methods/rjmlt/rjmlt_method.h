@@ -1,0 +1,56 @@
+// The method "rjmlt": reversible-jump MLT (Bitterli et al. 2017) - multiplexed MLT's chains per path
+// length with a third move that changes the bdpt technique and keeps the path (rjmlt_chain.h). The
+// bootstrap, b_k, chain allocation, splatting and development are MMLT's (the target function is the
+// same: C(s,t) w(s,t) n); only the chain state differs.
+// Moves: large steps with the common large-step probability (--large-step), technique changes with
+// --technique-step (default 0.05), small steps otherwise. Kinds: "large", "small", "technique".
+#pragma once
+#include "common/integrators/bdpt.h"
+#include "common/methods/pss_method.h"
+#include "common/methods/rjmlt/path_inversion.h"
+
+namespace mlt {
+
+class RjmltState;
+
+// MMLT's target; once a chain's RjmltState is attached, evaluation is the state's (it knows which
+// technique the proposal uses and checks that a jump re-traced the same path).
+class RjmltTarget final : public PssTarget {
+ public:
+  RjmltTarget(const RenderScene& scene, const IntegratorSettings& integrator);
+  void evaluate(SampleSource& source, int pathLength, PathContribution& out) override;
+  const RenderScene& scene() const { return scene_; }
+  MisHeuristic heuristic() const { return integrator_.heuristic; }
+  // The path of the last evaluation before a state was attached (the chain's replayed start state).
+  const MmltPath& lastPath() const { return last_; }
+  bool lastValid() const { return lastValid_; }
+  void attach(RjmltState* state) { state_ = state; }
+
+ private:
+  const RenderScene& scene_;
+  IntegratorSettings integrator_;
+  BdptWorkspace ws_;
+  MmltPath last_;
+  bool lastValid_ = false;
+  RjmltState* state_ = nullptr;
+};
+
+class RjmltMethod final : public PrimarySampleChainMethod {
+ public:
+  std::string name() const override { return "rjmlt"; }
+  std::string description() const override {
+    return "reversible-jump MLT (Bitterli et al. 2017): mmlt with technique changes that keep the path";
+  }
+  bool chainsPerLength() const override { return true; }
+  bool allowsSeparateDirect() const override { return true; }
+  std::vector<std::string> mutationKinds() const override { return {"large", "small", "technique"}; }
+  std::vector<ParamSpec> params() const override;
+  void validate(const RenderSettings& settings) const override;
+  std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
+  // rjmlt's state needs its chain's target and length: makeChainState. makeState alone throws.
+  std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
+  std::unique_ptr<ChainState> makeChainState(KelemenSource& source, const RenderSettings& settings, PssTarget& target,
+                                             int pathLength) const override;
+};
+
+}  // namespace mlt
