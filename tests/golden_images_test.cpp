@@ -15,6 +15,8 @@
 //  - Every method on glossy-plates and caustic-mirror (pt/lt/bdpt included) was re-recorded once for a
 //    deliberate change of the area light's position sampling: meshes of more than 16 triangles pick their
 //    triangle in two levels (area_light.cpp; same density, other numbers for the same u).
+//  - mmlt on every scene: mutations allocated to path lengths by allocationWeights (mlt_job.h) instead
+//    of in proportion to b_k.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -177,25 +179,25 @@ const Case kCases[] = {
     Case{"cornell-box", Method::BDPT, "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
     Case{"cornell-box", Method::PSSMLT, "2b0748ec268fa88f86347213498ffe7022fd45711269066a058af5b15d9b0f64"},
     Case{"cornell-box", Method::PSSMLT_BDPT, "c3d79a6b2d324a84c4179a5055b7578bdc87d67aff6a21d17fab73bac8e593ce"},
-    Case{"cornell-box", Method::MMLT, "018fd1235d7d0f25fb5eb1276d2e8bbf432b4c394a5a60b713b31d55d87c0775"},
+    Case{"cornell-box", Method::MMLT, "8da1e74c2e4685ed98d74160cc5327003c69e927fd32d97d574840591f76787b"},
     Case{"caustic-mirror", Method::PT, "3723f4618b74a301f9d12494536d2ef877a4b557ab8bf89a74b86cc8865e08e8"},
     Case{"caustic-mirror", Method::LT, "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", Method::BDPT, "2e551b84c146d4ee9d8b59508f5c14e52b01e1cac35d3a595a4be731e3c8dc48"},
     Case{"caustic-mirror", Method::PSSMLT, "a50595dd44568168d060c724daa93e34ec9b1b7496bfdef3ea25502d50bd76d0"},
     Case{"caustic-mirror", Method::PSSMLT_BDPT, "4cd2cba8f550db6ebf639e246284dda44ff173a0b5e61e1408e4fd42fa919804"},
-    Case{"caustic-mirror", Method::MMLT, "48ae57a0bd00f6e06428e3933956d5bb9947c4bf134ca89998922995a232c786"},
+    Case{"caustic-mirror", Method::MMLT, "8e727c7571cd732c37ef75a76f3dc7aa532a40cb87e8b32e4bd20208d4a1414f"},
     Case{"glossy-plates", Method::PT, "3e1d8606c1b9797535dd32b0bc0827e2fc6c6090d310b63a1999c98d8c6d1b17"},
     Case{"glossy-plates", Method::LT, "103658087ff52c3db233f55efb79121213e3e6d6abd21f68cad1f85490f541c5"},
     Case{"glossy-plates", Method::BDPT, "5531aed294d6cbed77b813522d03d1930c6077c6397cf5f244101b74d1982dee"},
     Case{"glossy-plates", Method::PSSMLT, "d3d90e78f44a4f95d1148c69fceca0909c8fda9fbfad2afad9a29d6913b0ab91"},
     Case{"glossy-plates", Method::PSSMLT_BDPT, "3dcf880be73168aed8927240c087d55b10e8a6bd9268c1396a61591e96f46557"},
-    Case{"glossy-plates", Method::MMLT, "d103875607701a98d99adcb2bd26b2ec405d8a4ea4b85c84bc75f26ee5cffd6e"},
+    Case{"glossy-plates", Method::MMLT, "54c467e92f3558392b56e221de484e538bf53676ed079f0b7d16724f2b669673"},
     Case{"cornell-variety", Method::PT, "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", Method::LT, "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", Method::BDPT, "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
     Case{"cornell-variety", Method::PSSMLT, "aa749154896273ad5d7ebb63d6ac6efa4193cfc4b053820884584f5a8f89ea95"},
     Case{"cornell-variety", Method::PSSMLT_BDPT, "5ab2457091dbf0575456078d698ab929f8151a213fbbe4962367a9e7e6b6e322"},
-    Case{"cornell-variety", Method::MMLT, "39219d72c615874a0c5dc4799b5e5c8781e9e1deefbb1545787cd0c4bf43a1fc"},
+    Case{"cornell-variety", Method::MMLT, "c04b2f7058360f6e8ae309082aebea52e3d43e06e3d56b2121f0054326eb2e3c"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Bundled, GoldenImages, ::testing::ValuesIn(kCases),
