@@ -165,8 +165,9 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
         std::printf("k=%d: %.3g -> %.3g (%llu -> %llu mutations)\n", rb.lengths[l].k, rs.lengths[l].bkStdErr,
                     rb.lengths[l].bkStdErr, (unsigned long long)rs.lengths[l].mutations,
                     (unsigned long long)rb.lengths[l].mutations);
-        if (rb.lengths[l].mutations >= rb.mutations / 10)
+        if (rb.lengths[l].mutations >= rb.mutations / 10) {
           EXPECT_LT(rb.lengths[l].bkStdErr, 0.9 * rs.lengths[l].bkStdErr) << "length " << rb.lengths[l].k;
+        }
       }
     }
     if (m == Method::PSSMLT) {  // one length: compare with the large steps' model variance alone
