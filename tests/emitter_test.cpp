@@ -12,6 +12,7 @@
 #include "common/emitter/light_sampler.h"
 #include "common/emitter/make_light.h"
 #include "common/interfaces/light.h"
+#include "common/scene/mesh_utils.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
 
@@ -21,7 +22,7 @@ namespace {
 using test::chi2Test2D;
 using test::chi2TestSphere;
 
-constexpr int kChi2Tests = 16;  // Sidak correction across the chi-square tests of this file
+constexpr int kChi2Tests = 17;  // Sidak correction across the chi-square tests of this file
 
 // Moller-Trumbore: distance along unit w from o to triangle (p0,p1,p2), or -1.
 float hitTriangle(const Vec3& o, const Vec3& w, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
@@ -134,6 +135,63 @@ TEST(AreaLight, PositionsUniformByArea) {
       },
       [&](Vec2 p) { return insideTrapezoid(p) ? 1 / area : 0.0; }, {0, 0}, {4, 2}, 16, 8, 100000, 0.01, kChi2Tests, 11);
   EXPECT_TRUE(r.passed) << r.message;
+}
+
+// A light of more than 16 triangles picks its triangle in two levels (area_light.cpp): still uniform by
+// area. The rectangle [0,4] x [0,2] in the plane z = 0 as 20 x 5 cells of unequal widths (x_i = 4 (i/20)^2),
+// two triangles each.
+TEST(AreaLight, PositionsUniformByAreaWithManyTriangles) {
+  MeshDesc m;
+  m.name = "grid";
+  const int nx = 20, ny = 5;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.positions.push_back({4.0f * float(i * i) / (nx * nx), 2.0f * j / ny, 0});
+  const auto at = [&](int i, int j) { return uint32_t(j * (nx + 1) + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) m.indices.insert(m.indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+  m.emission = Color(1);
+  m.bsdf = 0;
+  const auto light = makeAreaLight(m);
+  auto r = chi2Test2D(
+      [&](Pcg32& rng) -> std::optional<Vec2> {
+        auto s = light->sampleLe(rng.uniform2(), rng.uniform2());
+        if (!s) return std::nullopt;
+        if (std::fabs(s->ray.o.z) > 1e-6f) return Vec2(-100, -100);
+        EXPECT_NEAR(s->pdfPos, 1 / 8.0, 1e-6);
+        return Vec2(s->ray.o.x, s->ray.o.y);
+      },
+      [&](Vec2) { return 1 / 8.0; }, {0, 0}, {4, 2}, 16, 8, 100000, 0.01, kChi2Tests, 12);
+  EXPECT_TRUE(r.passed) << r.message;
+}
+
+// Markov chains need a small step of the position numbers to be a small move of the light point: on a
+// tessellated sphere (16256 facets, the bundled scenes' sphere lights) a step of 1/1024, the Kelemen
+// kernel's smallest, must mostly stay on the same facet (same normal, which the emitted direction is
+// sampled around). With the triangle picked by u.x alone every facet owned ~6e-5 of u.x and such a step
+// never stayed (the stuck chains of glossy-plates, tests/mlt_stuck_test.cpp).
+TEST(AreaLight, SmallPositionStepsStayOnTheFacet) {
+  MeshDesc m = makeSphere();
+  m.name = "sphere";
+  m.emission = Color(1);
+  m.bsdf = 0;
+  const auto light = makeAreaLight(m);
+  Pcg32 rng(5, 6);
+  const int n = 4000;
+  int same[2] = {0, 0};
+  for (int i = 0; i < n; ++i) {
+    const Vec2 u = rng.uniform2(), dir = rng.uniform2();
+    const auto s0 = light->sampleLe(u, dir);
+    ASSERT_TRUE(s0);
+    for (int axis = 0; axis < 2; ++axis) {
+      Vec2 v = u;
+      (axis == 0 ? v.x : v.y) = std::fmod((axis == 0 ? u.x : u.y) + 1.0f / 1024, 1.0f);
+      const auto s1 = light->sampleLe(v, dir);
+      ASSERT_TRUE(s1);
+      if (s1->nLight.x == s0->nLight.x && s1->nLight.y == s0->nLight.y && s1->nLight.z == s0->nLight.z) ++same[axis];
+    }
+  }
+  EXPECT_GT(same[0], 0.7 * n) << "u.x steps of 1/1024 leave the facet";
+  EXPECT_GT(same[1], 0.7 * n) << "u.y steps of 1/1024 leave the facet";
 }
 
 TEST(AreaLight, SampleLeDirectionsMatchPdfDir) {

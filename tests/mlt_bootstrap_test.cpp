@@ -101,6 +101,35 @@ TEST(Bootstrap, BitIdenticalForAnyThreadCount) {
   EXPECT_EQ(a.lengths[1].firstCandidate, uint64_t(1) << kCandidateSlotBits);
 }
 
+// The binned bootstrap is the same bootstrap, keeping every candidate's bin.
+TEST(Bootstrap, BinnedEqualsUnbinned) {
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 4096;
+  bc.totalCandidates = 3 * 4096 * 4;
+  bc.pathLengths = {1, 2, 3};
+  const auto c = [](uint64_t i, int k) {
+    const IndependentSource s(11, i);
+    const double x = s.valueAt(0, 0), y = s.valueAt(1, 3);
+    return x < 0.3 ? 0.0 : std::exp(k * x * y) * (y < 0.01 ? 50.0 : 1.0);
+  };
+  const BootstrapResult a = runBootstrap(bc, [&] { return CandidateFn(c); });
+  const BootstrapResult b = runBinnedBootstrap(bc, [&]() -> BinnedCandidateFn {
+    return [&](uint64_t i, int k, uint32_t* bin) {
+      *bin = uint32_t(i % 7);
+      return c(i, k);
+    };
+  });
+  ASSERT_EQ(a.lengths.size(), b.lengths.size());
+  EXPECT_EQ(std::memcmp(&a.b, &b.b, sizeof(double)), 0);
+  for (size_t l = 0; l < a.lengths.size(); ++l) {
+    EXPECT_EQ(a.lengths[l].c, b.lengths[l].c);
+    EXPECT_TRUE(a.lengths[l].bin.empty());
+    ASSERT_EQ(b.lengths[l].bin.size(), b.lengths[l].c.size());
+    for (size_t i = 0; i < b.lengths[l].bin.size(); ++i)
+      EXPECT_EQ(b.lengths[l].bin[i], uint32_t((b.lengths[l].firstCandidate + i) % 7));
+  }
+}
+
 TEST(Develop, QuantizedFilmsMergeExactlyInAnyGrouping) {
   std::vector<Film> films;
   Pcg32 rng(1, 1);

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -138,15 +139,23 @@ TEST(MltJob, ReplayMismatchFailsLoudly) {
   }
 }
 
-TEST(MltJob, MmltAllocatesMutationsProportionallyToBk) {
+// mmlt allocates mutations by allocationWeights (mlt_job.h): b_k * sqrt(gbar_k), from the bootstrap's
+// candidates and the film bins their light lands in.
+TEST(MltJob, MmltAllocatesMutationsByAllocationWeights) {
   RenderSettings s = settingsFor("mmlt", 11);
   s.chains = 40;
   const JobPlan plan = planJob(cornell(), s);
   const Normalization& n = plan.norm;
   ASSERT_EQ(n.bk.size(), 5u);
+  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), plan.settings);
+  const std::vector<double> w = allocationWeights(boot.result);
+  ASSERT_EQ(w.size(), 4u);
+  double sumW = 0;
+  for (double x : w) sumW += x;
   uint64_t total = 0;
   for (int k = 1; k <= 4; ++k) {
-    EXPECT_LT(std::fabs(double(n.mutationsPerLength[k]) - double(n.totalMutations) * n.bk[k] / n.b), 1.0) << k;
+    EXPECT_EQ(n.bk[k], boot.result.lengths[k - 1].b) << k;
+    EXPECT_LT(std::fabs(double(n.mutationsPerLength[k]) - double(n.totalMutations) * w[k - 1] / sumW), 1.0) << k;
     total += n.mutationsPerLength[k];
     uint64_t unitsTotal = 0;
     for (const WorkUnit& u : plan.units)
@@ -155,6 +164,49 @@ TEST(MltJob, MmltAllocatesMutationsProportionallyToBk) {
   }
   EXPECT_EQ(total, n.totalMutations);
   EXPECT_EQ(n.totalMutations, uint64_t(std::llround(8.0 * 16 * 12)));
+  // Length 1 is the light seen directly: its light lands on the brightest pixels, so it gets less than
+  // its share of b.
+  EXPECT_LT(double(n.mutationsPerLength[1]) / double(n.totalMutations), 0.5 * n.bk[1] / n.b);
+}
+
+// allocationWeights on made-up candidates: a uniform image gives b_k (the plain rule); a length whose light
+// lands only on a bright bin is weighted by sqrt of the c-weighted mean of 1 / (I^2 + eps) over its bins.
+TEST(MltJob, AllocationWeightsFollowWhereTheLightLands) {
+  const uint32_t bins = kAllocationBinsPerAxis * kAllocationBinsPerAxis;
+  const size_t N = 64 * bins;
+  const auto length = [&](int k, const std::function<double(size_t)>& c) {
+    LengthBootstrap lb;
+    lb.pathLength = k;
+    double sum = 0;
+    for (size_t i = 0; i < N; ++i) {
+      lb.c.push_back(c(i));
+      lb.bin.push_back(c(i) > 0 ? uint32_t(i % bins) : kNoBin);
+      sum += c(i);
+    }
+    lb.b = sum / double(N);
+    return lb;
+  };
+  BootstrapResult uniform;
+  uniform.lengths = {length(1, [](size_t) { return 2.0; }), length(2, [](size_t) { return 1.0; })};
+  std::vector<double> w = allocationWeights(uniform);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NEAR(w[0] / w[1], 2.0, 1e-12);
+
+  // Length 1: c = 1 in bin 0 only (b_1 = 1 / bins); length 2: c = 1 / bins everywhere (b_2 = 1 / bins).
+  BootstrapResult lit;
+  lit.lengths = {length(1, [&](size_t i) { return i % bins == 0 ? 1.0 : 0.0; }),
+                 length(2, [&](size_t) { return 1.0 / bins; })};
+  w = allocationWeights(lit);
+  ASSERT_EQ(w.size(), 2u);
+  const double iBright = 1.0 + 1.0 / bins, iDark = 1.0 / bins;  // bin images (mean luminance)
+  const double gBright = 1 / (iBright * iBright + kAllocationEps), gDark = 1 / (iDark * iDark + kAllocationEps);
+  const double gbar2 = (gBright + (bins - 1) * gDark) / bins;
+  EXPECT_NEAR(w[0] / w[1], std::sqrt(gBright / gbar2), 1e-9);
+  EXPECT_LT(w[0] / w[1], 0.2);
+
+  BootstrapResult unbinned = lit;
+  unbinned.lengths[0].bin.clear();
+  EXPECT_TRUE(allocationWeights(unbinned).empty());  // the plain rule
 }
 
 bool samePlan(const JobPlan& a, const JobPlan& b) {

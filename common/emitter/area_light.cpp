@@ -1,6 +1,16 @@
 // Area light over a triangle mesh: uniform by area (a triangle picked through a CDF over areas, then a
 // uniform point on it), constant radiance Le emitted on the front side only (dot(w, ng) > 0, ng from the
 // counter-clockwise winding), like Mitsuba's `area` emitter.
+//
+// Locality of the position sample (Markov chains). A mesh of more than kOneLevelTriangles triangles picks
+// its triangle in two levels: u.x a group of about sqrt(T) consecutive triangles (mesh order), u.y a
+// triangle inside the group, each by area through its CDF, and both remainders the point on the triangle.
+// The density is the same (area_i / A, uniform on the triangle); what changes is that a triangle owns an
+// interval of ~1/sqrt(T) in each coordinate instead of ~1/T in u.x alone. With one level a 16k-facet
+// sphere light gave every facet ~6e-5 of u.x, far below the smallest small step of the Kelemen kernel
+// (1/1024): every small step moved the light point ~16 facets away, and with it the facet normal that
+// the emitted direction is sampled around, so a chain on a light path through a sharp glossy lobe could
+// not make a single local move and stayed stuck (glossy-plates, tests/mlt_stuck_test.cpp).
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -39,6 +49,7 @@ class AreaLight final : public Light {
     Vec3 p, ng;
   };
   PointSample samplePoint(Vec2 u) const;
+  static constexpr size_t kOneLevelTriangles = 16;
   // Inverse of samplePoint: the u that lands on p (the triangle found by search), or nullopt if p is on
   // no triangle of the mesh.
   std::optional<Vec2> invertPoint(const Vec3& p) const;
@@ -52,6 +63,11 @@ class AreaLight final : public Light {
   std::vector<Vec3> v_;        // 3 vertices per triangle
   std::vector<Vec3> ng_;       // unit geometric normal per triangle
   std::vector<double> cdf_;    // size T + 1, cdf_[0] = 0, cdf_[T] = 1
+  // Two levels (T > kOneLevelTriangles): group g holds triangles [g * groupSize_, (g + 1) * groupSize_);
+  // groupCdf_ over groups by area (size G + 1); cdf_ is then the CDF within each triangle's group
+  // (cdf_[first of group] = 0, cdf_[end of group] = 1).
+  size_t groupSize_ = 0;
+  std::vector<double> groupCdf_;
   float area_ = 0;
   Color Le_;
 };
@@ -86,9 +102,25 @@ AreaLight::AreaLight(const MeshDesc& mesh) {
   }
   if (!(total > 0) || !std::isfinite(total))
     throw std::runtime_error("area light on mesh '" + mesh.name + "': total area is zero or not finite");
+  area_ = static_cast<float>(total);
   for (double& c : cdf_) c /= total;
   cdf_.back() = 1.0;
-  area_ = static_cast<float>(total);
+  if (nTri > kOneLevelTriangles) {
+    // cdf_[i] becomes the CDF at the start of triangle i within its group (0 for a group's first triangle;
+    // a group's end counts as 1), groupCdf_ the CDF over groups.
+    groupSize_ = size_t(std::ceil(std::sqrt(double(nTri))));
+    const size_t groups = (nTri + groupSize_ - 1) / groupSize_;
+    groupCdf_.assign(groups + 1, 0.0);
+    std::vector<double> within(nTri + 1, 1.0);
+    for (size_t g = 0; g < groups; ++g) {
+      const size_t first = g * groupSize_, end = std::min(nTri, first + groupSize_);
+      const double groupArea = cdf_[end] - cdf_[first];
+      groupCdf_[g + 1] = cdf_[end];
+      for (size_t i = first; i < end; ++i) within[i] = groupArea > 0 ? (cdf_[i] - cdf_[first]) / groupArea : 0.0;
+    }
+    groupCdf_.back() = 1.0;
+    cdf_ = std::move(within);
+  }
   buildGrid();
 }
 
@@ -151,13 +183,28 @@ void AreaLight::buildGrid() {
 
 // Picks a triangle with probability area_i / A using u.x, remaps u.x to [0,1) within the chosen interval
 // (so one 2D sample drives both choices), then a uniform point on the triangle: pdfA = 1 / A.
+// Two levels (see the top): u.x picks the group, u.y the triangle in it; the remainders place the point.
 AreaLight::PointSample AreaLight::samplePoint(Vec2 u) const {
   const size_t nTri = ng_.size();
-  size_t i = std::upper_bound(cdf_.begin(), cdf_.end(), double(u.x)) - cdf_.begin();
-  i = std::clamp<size_t>(i, 1, nTri) - 1;
-  const double w = cdf_[i + 1] - cdf_[i];
-  const float ux = w > 0 ? std::clamp(float((double(u.x) - cdf_[i]) / w), 0.0f, kOneMinusEpsilon) : 0.0f;
-  const Vec2 b = sampleUniformTriangle({ux, u.y});
+  // Index i in [lo, hi) whose CDF interval [cdf[i], cdf[i + 1]) holds v (cdf[lo] = 0; the end counts as 1,
+  // whatever cdf[hi] holds), and v remapped to [0, 1) within it.
+  const auto pick = [](const std::vector<double>& cdf, size_t lo, size_t hi, float v, float* rest) {
+    const size_t i = size_t(std::upper_bound(cdf.begin() + lo + 1, cdf.begin() + hi, double(v)) - cdf.begin()) - 1;
+    const double end = i + 1 < hi ? cdf[i + 1] : 1.0;
+    const double w = end - cdf[i];
+    *rest = w > 0 ? std::clamp(float((double(v) - cdf[i]) / w), 0.0f, kOneMinusEpsilon) : 0.0f;
+    return i;
+  };
+  float ux = 0, uy = u.y;
+  size_t i = 0;
+  if (groupSize_ == 0) {
+    i = pick(cdf_, 0, nTri, u.x, &ux);
+  } else {
+    const size_t g = pick(groupCdf_, 0, groupCdf_.size() - 1, u.x, &ux);
+    const size_t first = g * groupSize_, end = std::min(nTri, first + groupSize_);
+    i = pick(cdf_, first, end, u.y, &uy);
+  }
+  const Vec2 b = sampleUniformTriangle({ux, uy});
   const Vec3* p = &v_[3 * i];
   return {p[0] * b.x + p[1] * b.y + p[2] * (1 - b.x - b.y), ng_[i]};
 }
@@ -210,7 +257,8 @@ void AreaLight::pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, flo
 // The triangle holding p is found by a linear search (the one with the smallest distance to p, counting
 // distance off the plane and outside the edges; a point on a shared edge may go to either, a set of
 // measure zero). samplePoint's u.x picks the triangle through the CDF and is remapped inside the chosen
-// interval, so u.x = cdf_i + w_i ux is one-to-one (no ambiguity), and b0 = 1 - sqrt(ux), b1 = uy sqrt(ux).
+// interval, so u.x = cdf_i + w_i ux is one-to-one (no ambiguity), and b0 = 1 - sqrt(ux), b1 = uy sqrt(ux);
+// with two levels u.x picks the group and u.y the triangle in it, each remapped the same way.
 // Jacobian (per unit area): (area_i / A) * (1 / area_i) = 1 / A.
 std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
   const size_t nTri = ng_.size();
@@ -251,12 +299,27 @@ std::optional<Vec2> AreaLight::invertPoint(const Vec3& p) const {
   }
   if (best == nTri || !(bestErr <= 1)) return std::nullopt;
   const Vec2 ut = invertUniformTriangle(std::clamp(bestB0, 0.0, 1.0), std::clamp(bestB1, 0.0, 1.0));
-  const double lo = cdf_[best], hi = cdf_[best + 1];
-  if (!(hi > lo)) return std::nullopt;
-  float ux = static_cast<float>(lo + double(ut.x) * (hi - lo));
-  while (double(ux) >= hi && ux > 0) ux = std::nextafter(ux, 0.0f);  // stay in triangle i's interval
-  while (double(ux) < lo) ux = std::nextafter(ux, 1.0f);
-  return Vec2(clampPrimary(ux), ut.y);
+  // The remainder r in [0, 1) of a choice placed back inside the chosen interval [lo, hi) of its CDF.
+  const auto place = [](double lo, double hi, float r) -> std::optional<float> {
+    if (!(hi > lo)) return std::nullopt;
+    float v = static_cast<float>(lo + double(r) * (hi - lo));
+    while (double(v) >= hi && v > 0) v = std::nextafter(v, 0.0f);  // stay in the interval
+    while (double(v) < lo) v = std::nextafter(v, 1.0f);
+    return clampPrimary(v);
+  };
+  if (groupSize_ == 0) {  // one level: u.x = the triangle's interval, remainder ut.x; u.y = ut.y
+    const std::optional<float> ux = place(cdf_[best], cdf_[best + 1], ut.x);
+    if (!ux) return std::nullopt;
+    return Vec2(*ux, ut.y);
+  }
+  // Two levels: u.x in the group's interval (remainder ut.x), u.y in the triangle's interval within its
+  // group (remainder ut.y); a group's last triangle ends at 1 (see samplePoint).
+  const size_t g = best / groupSize_;
+  const size_t groupEnd = std::min(ng_.size(), (g + 1) * groupSize_);
+  const std::optional<float> ux = place(groupCdf_[g], groupCdf_[g + 1], ut.x);
+  const std::optional<float> uy = place(cdf_[best], best + 1 < groupEnd ? cdf_[best + 1] : 1.0, ut.y);
+  if (!ux || !uy) return std::nullopt;
+  return Vec2(*ux, *uy);
 }
 
 std::optional<Inverse2D> AreaLight::invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3&,

@@ -78,6 +78,40 @@ uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M : 0.0);
 }
 
+uint32_t allocationBin(Vec2 pRaster, int width, int height) {
+  const int n = kAllocationBinsPerAxis;
+  const int x = std::clamp(int(std::floor(double(pRaster.x) * n / std::max(width, 1))), 0, n - 1);
+  const int y = std::clamp(int(std::floor(double(pRaster.y) * n / std::max(height, 1))), 0, n - 1);
+  return uint32_t(y * n + x);
+}
+
+std::vector<double> allocationWeights(const BootstrapResult& boot) {
+  std::vector<double> w;
+  if (boot.lengths.size() < 2) return w;
+  for (const LengthBootstrap& lb : boot.lengths)
+    if (lb.bin.size() != lb.c.size()) return w;  // not binned: the plain rule
+  // Bin image: mean luminance of bin t = (bins) * sum_k mean_i(c_i [bin(i) = t]) (each bin is 1/bins of
+  // the film; E_u[c_k 1_t] = (1/P) sum_(j in t) I_kj).
+  const size_t bins = size_t(kAllocationBinsPerAxis) * kAllocationBinsPerAxis;
+  std::vector<double> image(bins, 0.0);
+  for (const LengthBootstrap& lb : boot.lengths) {
+    if (lb.c.empty()) continue;
+    const double scale = double(bins) / double(lb.c.size());
+    for (size_t i = 0; i < lb.c.size(); ++i)
+      if (lb.bin[i] < bins) image[lb.bin[i]] += lb.c[i] * scale;
+  }
+  for (const LengthBootstrap& lb : boot.lengths) {
+    double sumC = 0, sumCg = 0;  // in index order: deterministic
+    for (size_t i = 0; i < lb.c.size(); ++i)
+      if (lb.c[i] > 0 && lb.bin[i] < bins) {
+        sumC += lb.c[i];
+        sumCg += lb.c[i] / (image[lb.bin[i]] * image[lb.bin[i]] + kAllocationEps);
+      }
+    w.push_back(sumC > 0 ? lb.b * std::sqrt(sumCg / sumC) : 0.0);
+  }
+  return w;
+}
+
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
   RefinedB r;
   const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
@@ -165,16 +199,20 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     bc.candidatesPerLength /= 4;
   }
   const uint64_t seed = s.seed;
-  const CandidateFnFactory candidates = [&spec, &scene, &s, seed]() -> CandidateFn {
+  const int width = s.width, height = s.height;
+  const BinnedCandidateFnFactory candidates = [&spec, &scene, &s, seed, width, height]() -> BinnedCandidateFn {
     std::shared_ptr<PssTarget> target = spec.makeTarget(scene, s);
     auto path = std::make_shared<PathContribution>();
-    return [target, path, seed](uint64_t index, int k) {
+    return [target, path, seed, width, height](uint64_t index, int k, uint32_t* bin) {
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
-      return targetFunction(*path);
+      const double c = targetFunction(*path);
+      // mmlt: one splat per path; its allocation bin (pssmlt's single length needs none).
+      if (c > 0 && !path->splats.empty()) *bin = allocationBin(path->splats[0].pRaster, width, height);
+      return c;
     };
   };
-  out.result = runBootstrap(bc, candidates);
+  out.result = runBinnedBootstrap(bc, candidates);
   if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
   // Unlimited depth: one more block of lengths while the last one carried more than
@@ -191,7 +229,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     bc.firstSlot = all.lengths.size();
     bc.pathLengths.clear();
     for (int k = next; k < next + kUnlimitedLengthBlock && k <= kMaxUnlimitedLength; ++k) bc.pathLengths.push_back(k);
-    BootstrapResult block = runBootstrap(bc, candidates);
+    BootstrapResult block = runBinnedBootstrap(bc, candidates);
     for (LengthBootstrap& lb : block.lengths) all.lengths.push_back(std::move(lb));
     all.b += block.b;
     var += block.bStdErr * block.bStdErr;
@@ -232,12 +270,14 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   norm.bootstrapSeconds = boot.seconds;
   norm.totalMutations = boot.b > 0 ? M : 0;
 
-  // ---- chain allocation: mutations M_k and chains C_k proportional to b_k (largest remainder) ----
-  std::vector<double> bk;
-  for (const auto& lb : boot.lengths) bk.push_back(lb.b);
-  const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, bk) : std::vector<uint64_t>(bk.size(), 0);
+  // ---- chain allocation: mutations M_k and chains C_k by allocationWeights (mlt_job.h; the plain rule,
+  // proportional to b_k, for one length), largest remainder ----
+  std::vector<double> weights = allocationWeights(boot);
+  if (weights.empty())
+    for (const auto& lb : boot.lengths) weights.push_back(lb.b);
+  const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, weights) : std::vector<uint64_t>(weights.size(), 0);
   const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
-  std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, bk) : std::vector<uint64_t>(bk.size(), 0);
+  std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, weights) : std::vector<uint64_t>(weights.size(), 0);
   if (spec.chainsPerLength()) {
     const int kMax = boot.lengths.empty() ? 0 : boot.lengths.back().pathLength;  // unlimited depth: as bootstrapped
     norm.bk.assign(kMax + 1, 0);

@@ -84,6 +84,23 @@ uint64_t bootstrapPerLengthFor(const ChainJobSpec& spec, const RenderSettings& s
 constexpr int kUnlimitedLengthBlock = 8;
 constexpr double kNegligibleLengthShare = 1e-4;
 constexpr int kMaxUnlimitedLength = 1024;
+// mmlt: mutations (and chains) per path length k in proportion to
+//     b_k * sqrt(gbar_k),   gbar_k = sum_i c_i g(bin_i) / sum_i c_i   over length k's bootstrap candidates i,
+// with g = 1 / (I^2 + kAllocationEps) of the image I (mean luminance) of the bin the candidate's light
+// lands in, estimated from all candidates on kAllocationBinsPerAxis^2 bins of the film.
+// Why: length k's chains with M_k mutations visit pixel j in proportion to I_kj / b_k; a pixel estimate
+// b_k P / M_k * (visits) then has variance ~ tau_k b_k P I_kj / M_k (tau_k: the chains' correlation time),
+// i.e. a relative squared error summed over pixels of V_k / M_k with V_k ~ tau_k b_k P sum_j I_kj g_j
+// = tau_k (b_k P)^2 gbar_k. Minimizing sum_k V_k / M_k at sum_k M_k = M gives M_k ~ sqrt(V_k) = b_k
+// sqrt(gbar_k) (equal tau_k assumed). With g constant this is the plain rule M_k ~ b_k; a length whose light
+// lands on bright pixels (the light seen directly) needs fewer mutations for the same relative error.
+// kAllocationEps is the evaluation harness's relMSE epsilon: the rule minimizes that metric (docs/CHAINS.md).
+constexpr int kAllocationBinsPerAxis = 16;
+constexpr double kAllocationEps = 1e-2;
+uint32_t allocationBin(Vec2 pRaster, int width, int height);
+// Weights per bootstrap length (boot.lengths order); empty if the bootstrap is not binned or has one length
+// (then the allocation is proportional to b_k).
+std::vector<double> allocationWeights(const BootstrapResult& boot);
 // The chain's sample-source parameters from the settings (large-step probability, kernel).
 KelemenParams kelemenParams(const RenderSettings& settings);
 // The path lengths a job's chains cover ({-1} without chains per length; kMin..maxDepth with them; with

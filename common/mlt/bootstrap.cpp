@@ -13,7 +13,10 @@
 
 namespace mlt {
 
-BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn) {
+namespace {
+
+BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandidateFnFactory& makeCandidateFn,
+                              bool binned) {
   const auto start = std::chrono::steady_clock::now();
   if (config.candidatesPerLength < 2)
     throw std::invalid_argument("bootstrap: need at least 2 candidates per path length, got " +
@@ -29,9 +32,12 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
   // Evaluates candidates [from, to) of length slot l in parallel (each writes its own slot).
   const auto evaluate = [&](LengthBootstrap& lb, uint64_t from, uint64_t to) {
     lb.c.resize(to);
+    if (binned) lb.bin.resize(to, kNoBin);
     const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
-      CandidateFn fn = makeCandidateFn();
-      for (uint64_t i = r.begin(); i != r.end(); ++i) lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength);
+      BinnedCandidateFn fn = makeCandidateFn();
+      uint32_t unused = kNoBin;
+      for (uint64_t i = r.begin(); i != r.end(); ++i)
+        lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength, binned ? &lb.bin[i] : &unused);
     };
     if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
     else body(tbb::blocked_range<uint64_t>(from, to));
@@ -129,6 +135,18 @@ BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFac
   spdlog::info("bootstrap: b = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates in {:.2f} s", result.b, result.bStdErr,
                result.b > 0 ? 100 * result.bStdErr / result.b : 0.0, result.candidates, result.seconds);
   return result;
+}
+
+}  // namespace
+
+BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn) {
+  return bootstrapImpl(config, [&makeCandidateFn]() -> BinnedCandidateFn {
+    return [fn = makeCandidateFn()](uint64_t index, int pathLength, uint32_t*) { return fn(index, pathLength); };
+  }, false);
+}
+
+BootstrapResult runBinnedBootstrap(const BootstrapConfig& config, const BinnedCandidateFnFactory& makeCandidateFn) {
+  return bootstrapImpl(config, makeCandidateFn, true);
 }
 
 std::vector<uint64_t> apportion(uint64_t total, const std::vector<double>& weights) {

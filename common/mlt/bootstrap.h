@@ -32,6 +32,11 @@ namespace mlt {
 using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
 // Makes a CandidateFn with its own scratch buffers (called once per parallel task).
 using CandidateFnFactory = std::function<CandidateFn()>;
+// The same, also reporting the film bin the candidate's light lands in (kNoBin: none), which the chain
+// allocation uses to weigh path lengths by where their light lands (mlt_job.cpp, allocationWeights).
+constexpr uint32_t kNoBin = UINT32_MAX;
+using BinnedCandidateFn = std::function<double(uint64_t index, int pathLength, uint32_t* bin)>;
+using BinnedCandidateFnFactory = std::function<BinnedCandidateFn()>;
 
 
 struct BootstrapConfig {
@@ -50,6 +55,7 @@ struct LengthBootstrap {
   int pathLength = -1;
   uint64_t firstCandidate = 0;
   std::vector<double> c;  // target value of each candidate
+  std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
   double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
   double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
   AliasTable table;       // over c; empty if b == 0
@@ -63,6 +69,8 @@ struct BootstrapResult {
 };
 
 BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn);
+// The same, keeping every candidate's film bin in LengthBootstrap::bin (identical c, b and sizing).
+BootstrapResult runBinnedBootstrap(const BootstrapConfig& config, const BinnedCandidateFnFactory& makeCandidateFn);
 
 // Largest-remainder (Hamilton) apportionment of `total` among weights (ties to the lower index):
 // deterministic, sums exactly to total, and each share is within 1 of total * w_i / sum(w).
