@@ -85,8 +85,8 @@ Proposal RjmltState::propose() {
       double sum = 0;
       for (int m = 0; m < n_; ++m)
         if (invs_[m] && maxJ > 0 && !connectsAtDelta(current_.z, m, k_ + 1 - m)) {
-          const double r = invs_[m]->jacobian / maxJ;
-          weights_[m] = r * r;
+          const double ratio = invs_[m]->jacobian / maxJ;
+          weights_[m] = ratio * ratio;
           sum += weights_[m];
         }
       if (sum > 0 && weights_[s_] > 0) {

@@ -43,7 +43,7 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   technique.name = "technique-step";
   technique.type = ParamSpec::Type::Double;
   technique.defaultValue = "0.05";
-  technique.help = "rjmlt: probability of a technique change (a reversible jump) per mutation";
+  technique.help = "probability of a technique change (a reversible jump) per mutation";
   technique.min = 0;
   technique.max = 1;
   return {technique};
