@@ -172,9 +172,16 @@ double PathSpace::lightStep(const Path& x, int i) const {
 }
 
 std::optional<PathVertex> PathSpace::trace(const Vec3& from, const Vec3& fromNg, const Vec3& dir) const {
+  // The ray starts exactly at `from` and skips its own surface by tMin, so the hit lies on the line
+  // from + t dir: the perturbations measure their steps back from vertex positions, and an origin offset
+  // along the normal (1e-4 scene units) would move the line by more than caustic steps of 1e-4 rad.
   Ray r;
-  r.o = offsetRayOrigin(from, fromNg, dir);
+  r.o = from;
   r.d = dir;
+  if (fromNg.x != 0 || fromNg.y != 0 || fromNg.z != 0) {
+    const float scale = std::fmax(1.0f, std::fmax(std::fabs(from.x), std::fmax(std::fabs(from.y), std::fabs(from.z))));
+    r.tMin = 1e-4f * scale / std::fmax(absDot(fromNg, dir), 0.05f);
+  }
   const std::optional<SurfaceHit> hit = scene_.intersect(r);
   if (!hit) return std::nullopt;
   PathVertex v;

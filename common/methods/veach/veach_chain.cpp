@@ -50,6 +50,8 @@ Proposal VeachChainState::propose() {
   if (!moves_[kind]->propose(x_, rng_, y_)) return {kind, 0.0, false};
   fy_ = space_.f(y_, &rasterY_);
   if (fy_.isBlack()) return {kind, 0.0, false};
+  // The bidirectional mutation with kd = ka = 1 reconnects x to itself: y = x, T-ratio 1.
+  if (samePath(x_, y_)) return {kind, 1.0, false};
   const double txy = moves_[kind]->density(x_, y_), tyx = moves_[kind]->density(y_, x_);
   const double py = choiceProbability(kind, y_);
   // T(x -> y) = 0 for a proposal means the rounding of retraced geometry left T's support: reject.
@@ -96,6 +98,13 @@ PathVertex fromBdpt(const Vertex& b) {
 }
 
 }  // namespace
+
+bool samePath(const Path& a, const Path& b) {
+  if (a.v.size() != b.v.size()) return false;
+  for (size_t i = 0; i < a.v.size(); ++i)
+    if (!a.v[i].samePoint(b.v[i])) return false;
+  return true;
+}
 
 Path bdptStrategyPath(const Vertex* light, int s, const Vertex* camera, int t, const Vertex& sampled, Vec2 uLens) {
   Path x;

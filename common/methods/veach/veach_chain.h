@@ -68,6 +68,9 @@ class VeachChainTarget final : public ChainTarget {
 // The current path as a contribution (for the loop's start state).
 void currentContribution(const VeachChainState& state, PathContribution& out);
 
+// Same vertex positions.
+bool samePath(const Path& a, const Path& b);
+
 // ---- start states -------------------------------------------------------------------------------------
 struct StartPath {
   Path path;
