@@ -3,9 +3,9 @@
 // unweighted contribution of strategy (s, t) must equal
 //     C(s, t) = f(x) / (prod_{i<s} lightStep(x, i) * lensDensity * prod_{i>=s} eyeStep(x, i)),
 // which checks f (Le, G, the shading-normal form of the BSDF factors, We, the canonical measure at
-// specular vertices) and both sides' densities at once. Camera-side specular chains (glass and mirror
-// spheres with shading normals) are covered; light-side specular vertices are excluded (the densities of
-// path.h do not generate through them). Tolerances: 1e-3 without specular vertices, 3e-2 with (see the
+// specular vertices) and both sides' densities at once, on specular chains traced from either side
+// (glass and mirror spheres with shading normals): a light-traced chain's density times
+// lightChainToCanonical (etendue conversion) must give the same C. Tolerances: 1e-3 without specular vertices, 3e-2 with (see the
 // comment at the comparison). The start path of a chain replays the bootstrap's c exactly.
 #include <gtest/gtest.h>
 
@@ -29,7 +29,7 @@ using veach::Path;
 using veach::PathSpace;
 
 struct Agreement {
-  int compared = 0, agreed = 0, withSpecular = 0;
+  int compared = 0, agreed = 0, withSpecular = 0, lightChains = 0;
   double worst = 0;
 };
 
@@ -46,9 +46,6 @@ Agreement compareStrategies(const RenderScene& scene, int maxDepth, uint64_t see
     for (int t = 2; t <= nc; ++t) {
       for (int s = 0; s <= nl; ++s) {
         if (s == 1 || s + t - 1 > maxDepth || s + t < 2) continue;  // s = 1 resamples the light by NEE
-        bool lightSpecular = false;
-        for (int i = 1; i < s; ++i) lightSpecular |= ws.light[i].delta;
-        if (lightSpecular) continue;
         Vertex sampled;
         Vec2 pr = raster;
         const Color C = connectBdpt(scene, source, ws.light.data(), s, ws.camera.data(), t, &sampled, &pr);
@@ -60,6 +57,17 @@ Agreement compareStrategies(const RenderScene& scene, int maxDepth, uint64_t see
         const Color f = space.f(x, &r2);
         double p = space.lensDensity();
         for (int i = 0; i < s; ++i) p *= space.lightStep(x, i);
+        for (int i = 1; i < s - 1;) {  // light-traced specular runs: light-free -> canonical
+          if (!x.v[i].specular) {
+            ++i;
+            continue;
+          }
+          int r1 = i;
+          while (x.v[r1 + 1].specular) ++r1;
+          p *= veach::lightChainToCanonical(x, i, r1);
+          a.lightChains += 1;
+          i = r1 + 1;
+        }
         for (int i = s; i < x.k(); ++i) p *= space.eyeStep(x, i);
         const double expect = luminance(C), got = p > 0 ? luminance(f) / p : 0.0;
         const double rel = std::fabs(got - expect) / expect;
@@ -98,9 +106,10 @@ TEST(VeachPath, ContributionOverDensityIsBdptsUnweightedContributionDiffuse) {
 TEST(VeachPath, ContributionOverDensityIsBdptsUnweightedContributionSpecularChains) {
   const auto scene = RenderScene::build(test::cornellBoxSpecular(16, 16, /*smoothNormals=*/true));
   const Agreement a = compareStrategies(*scene, 6, 12, 4000);
-  std::printf("glass + mirror box: %d strategies compared (%d with specular vertices), %d agree (worst %.3g)\n",
-              a.compared, a.withSpecular, a.agreed, a.worst);
+  std::printf("glass + mirror box: %d strategies compared (%d with specular vertices, %d light-traced specular "
+              "runs), %d agree (worst %.3g)\n", a.compared, a.withSpecular, a.lightChains, a.agreed, a.worst);
   ASSERT_GT(a.withSpecular, 300);
+  ASSERT_GT(a.lightChains, 100);
   EXPECT_GE(a.agreed, int(0.995 * a.compared));
 }
 

@@ -11,13 +11,14 @@
 // allowed values: a new lens vertex needs m' >= 1; a kept lens vertex (m = k) takes m' = 0 (it is
 // connected to, never traced from). The two sides are then joined by a deterministic connection, or,
 // when there is no light side at all (l = -1, l' = 0), the eye side must end on an emitter.
-// The light side samples only non-Dirac lobes (mutations.h); the eye side follows Dirac lobes too.
+// Both sides follow Dirac lobes (the kept end x_l excepted: it stays non-specular); a specular run traced
+// from the light side has its density converted to the canonical measure (path.h lightChainToCanonical).
 //
 // Transition density (the lecture's g(x -> y)):
 //     T(x -> y) = sum over (l, m) whose kept parts x_0..x_l, x_m..x_k are y's ends
 //                   pd[l, m] pa1[ka | kd] / #l'  sum over allowed l'  p_light(z_1..z_l') p_eye(z_ka-1..z_l'+1),
 // with p_light / p_eye the products of PathSpace::lightStep / eyeStep over the new vertices (canonical
-// measure, path.h).
+// measure, path.h; the light side's specular runs converted).
 #include <algorithm>
 #include <cmath>
 
@@ -119,13 +120,16 @@ class BidirMutation final : public Mutation {
           w = normalize(Frame(from.ng).toWorld(local));
         } else {
           const std::optional<BsdfSample> bs = sampleDirection(from, y.v[y.v.size() - 2], TransportMode::Importance, rng, &w);
-          if (!bs || bs->delta) return false;
+          if (!bs) return false;
+          if (bs->delta) {
+            if (int(y.v.size()) - 1 == l) return false;  // the kept end x_l stays non-specular
+            y.v.back().specular = true;
+          }
         }
         const std::optional<PathVertex> hit = space_.trace(from.p, from.ng, w);
         if (!hit) return false;
         nv = *hit;
       }
-      nv.specular = false;
       y.v.push_back(nv);
     }
 
@@ -198,10 +202,19 @@ class BidirMutation final : public Mutation {
         const Range lp = lpRange(nZ, m, kx);
         for (int lPrime = lp.lo; lPrime <= lp.hi; ++lPrime) {
           double dens = pTerm / double(lp.count());
-          // Light side: y_{l+1} .. y_{l+l'}, non-specular.
-          for (int i = l + 1; i <= l + lPrime && dens > 0; ++i) {
-            if (y.v[i].specular) dens = 0;
-            else dens *= space_.lightStep(y, i);
+          // Light side: y_{l+1} .. y_{l+l'} (its end, the connection, non-specular); each specular run
+          // it traced is converted from the light-free to the canonical measure.
+          if (lPrime > 0 && y.v[l + lPrime].specular) dens = 0;
+          for (int i = l + 1; i <= l + lPrime && dens > 0; ++i) dens *= space_.lightStep(y, i);
+          for (int i = l + 1; i < l + lPrime && dens > 0;) {
+            if (!y.v[i].specular) {
+              ++i;
+              continue;
+            }
+            int r1 = i;
+            while (y.v[r1 + 1].specular) ++r1;
+            dens *= lightChainToCanonical(y, i, r1);
+            i = r1 + 1;
           }
           // Eye side: y_{ky-nB} down to y_{l+l'+1}, each from its eye-side neighbour; a new lens vertex
           // first (nB = 0).

@@ -15,9 +15,8 @@
 //                (sec. 11.4.3.3) -- not implemented (applicable() is false).
 //  lens-subpath  replace the eye subpath E S* D by a fresh one through a uniform film position (sec. 11.4.4).
 //
-// The light side never generates through a Dirac lobe (bidir's light-side vertices are non-specular):
-// every specular chain a move creates is then traced from the eye, in the canonical measure, except the
-// caustic perturbation's, which converts explicitly (perturbations.cpp).
+// Specular chains traced from the eye are in the canonical measure of path.h; those traced from the light
+// (bidir's light side, the caustic perturbation) are converted (path.h lightChainToCanonical).
 #pragma once
 #include <memory>
 #include <string>

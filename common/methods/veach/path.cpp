@@ -44,6 +44,22 @@ float geometry(const PathVertex& a, const PathVertex& b) {
   return PathSpace::cosAt(a, w) * PathSpace::cosAt(b, w) / d2;
 }
 
+double lightChainToCanonical(const Path& x, int r0, int r1) {
+  const auto& v = x.v;
+  const double gv = geometry(v[r0 - 1], v[r0]);
+  if (!(gv > 0)) return 0;
+  double factor = geometry(v[r1 + 1], v[r1]) / gv;
+  for (int i = r0; i <= r1; ++i) {
+    const PathVertex& s = v[i];
+    float d2;
+    const Vec3 we = unitToward(s.p, v[i + 1].p, &d2), wl = unitToward(s.p, v[i - 1].p, &d2);
+    const double den = double(absDot(s.ng, we)) * absDot(s.ns, wl);
+    if (!(den > 0)) return 0;
+    factor *= double(absDot(s.ns, we)) * absDot(s.ng, wl) / den;
+  }
+  return factor;
+}
+
 PathSpace::PathSpace(const RenderScene& scene, int maxDepth)
     : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth) {
   for (const auto& l : scene.lights())
@@ -163,11 +179,15 @@ double PathSpace::lightStep(const Path& x, int i) const {
     return double(pdfDir) * cosAt(v[1], w) / d2;
   }
   const PathVertex& from = v[i - 1];
-  if (from.kind != VertexKind::Surface || from.specular) return 0;
+  if (from.kind != VertexKind::Surface) return 0;
   float d2p;
   const Vec3 wo = unitToward(from.p, v[i - 2].p, &d2p);
   const Frame frame(from.ns);
   const BsdfQuery q{from.uv, TransportMode::Importance};
+  if (from.specular) {
+    const std::optional<SpecularLobe> lobe = specularLobe(*from.bsdf, frame.toLocal(wo), frame.toLocal(w), q);
+    return lobe ? double(lobe->pdf) : 0.0;
+  }
   return double(from.bsdf->pdf(frame.toLocal(wo), frame.toLocal(w), q)) * cosAt(v[i], w) / d2;
 }
 

@@ -21,7 +21,8 @@
 // chain, G(a, s_1) dA(a) dA(s_1) = G(s_m, v) dA(s_m) dA(v) (same medium at both ends, v = x_j), which
 // turns the density into the canonical measure:
 //     T(x -> y) = p_w * G(y_{k-1}, y_{k-2}) / |cos_{y_j}(w)|,
-// (for an empty chain, j = k - 2: p_w |cos y_{k-1}| / d^2, the plain solid angle to area conversion).
+// (for an empty chain, j = k - 2: p_w |cos y_{k-1}| / d^2, the plain solid angle to area conversion),
+// times a shading-normal factor per specular vertex (path.h lightChainToCanonical).
 #include <cmath>
 
 #include "common/methods/veach/mutations.h"
@@ -152,7 +153,9 @@ class CausticPerturbation final : public Mutation {
     const double pW = exponentialStepDensity(theta, theta1_, theta2_) / (2 * M_PI * std::sin(theta));
     const double cosV = PathSpace::cosAt(y.v[j], wy);
     if (!(cosV > 0)) return 0;
-    return pW * geometry(y.v[k - 1], y.v[k - 2]) / cosV;
+    // Light-free density p_w G(v, s_m) / |cos_v| (s_m = y_{j+1}), converted to the canonical measure.
+    const double lightFree = pW * geometry(y.v[j], y.v[j + 1]) / cosV;
+    return j + 1 <= k - 2 ? lightFree * lightChainToCanonical(y, j + 1, k - 2) : lightFree;
   }
 
  private:
