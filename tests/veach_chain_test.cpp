@@ -26,6 +26,7 @@
 #include "common/render/render_scene.h"
 #include "tests/support/estimates.h"
 #include "tests/support/test_scenes.h"
+#include "tests/support/veach_stats.h"
 
 namespace mlt {
 namespace {
@@ -34,52 +35,6 @@ using veach::MutationSettings;
 
 constexpr int kRuns = 16, kTiles = 4, kSize = 16;
 constexpr double kZ = 4.5;
-
-test::ImageStats veachStats(const RenderScene& scene, int maxDepth, const MutationSettings& mut, double mpp,
-                            std::string* acceptance) {
-  std::vector<std::vector<double>> values;
-  ChainStats all;
-  for (int r = 0; r < kRuns; ++r) {
-    RenderSettings s;
-    s.seed = 4000 + uint64_t(r);
-    s.width = s.height = kSize;
-    s.integrator.maxDepth = maxDepth;
-    s.mutationsPerPixel = mpp;
-    s.chains = 8;  // long chains (~2-3k mutations): a wrong acceptance ratio shows before the start states wash it out
-    const JobPlan plan = veach::planVeachJob(scene, s);
-    std::vector<PartialResult> parts(plan.units.size());
-    tbb::parallel_for(size_t(0), parts.size(),
-                      [&](size_t i) { parts[i] = veach::runVeachChain(scene, plan, plan.units[i], mut); });
-    PartialResult merged;
-    for (const PartialResult& p : parts) merged.add(p);
-    all.add(merged.stats);
-    const std::vector<Color> img = veach::developVeachImage(plan, merged);
-    std::vector<double> v(1 + kTiles * kTiles, 0.0);
-    for (int y = 0; y < kSize; ++y)
-      for (int x = 0; x < kSize; ++x) {
-        const double L = luminance(img[size_t(y) * kSize + x]);
-        v[0] += L / (kSize * kSize);
-        v[1 + (y * kTiles / kSize) * kTiles + x * kTiles / kSize] += L * kTiles * kTiles / (kSize * kSize);
-      }
-    values.push_back(v);
-  }
-  if (acceptance) *acceptance = veach::acceptanceSummary(all);
-  test::ImageStats st;
-  st.tilesX = st.tilesY = kTiles;
-  st.n = kRuns;
-  const size_t K = values[0].size();
-  st.mean.assign(K, 0);
-  st.stdErr.assign(K, 0);
-  for (size_t k = 0; k < K; ++k) {
-    double m = 0, sq = 0;
-    for (const auto& v : values) m += v[k];
-    m /= kRuns;
-    for (const auto& v : values) sq += (v[k] - m) * (v[k] - m);
-    st.mean[k] = m;
-    st.stdErr[k] = std::sqrt(sq / (kRuns - 1) / kRuns);
-  }
-  return st;
-}
 
 test::ImageStats bdptStats(const RenderScene& scene, int maxDepth, uint64_t samplesPerPixel) {
   IntegratorSettings is;
@@ -108,7 +63,12 @@ MutationSettings only(std::initializer_list<int> kinds) {
 double compare(const char* name, const RenderScene& scene, int maxDepth, const MutationSettings& mut, double mpp,
                const test::ImageStats& ref) {
   std::string acc;
-  const test::ImageStats st = veachStats(scene, maxDepth, mut, mpp, &acc);
+  RenderSettings s;
+  s.width = s.height = kSize;
+  s.integrator.maxDepth = maxDepth;
+  s.mutationsPerPixel = mpp;
+  s.chains = 8;  // long chains (~2-3k mutations): a wrong acceptance ratio shows before the start states wash it out
+  const test::ImageStats st = test::veachStats(scene, s, mut, kRuns, kTiles, 4000, &acc);
   int where = 0;
   const double z = test::maxZ(st, ref, &where);
   std::printf("%s: mean %.5f +- %.5f (bdpt %.5f +- %.5f), max z %.2f at %d; acceptance: %s\n", name, st.mean[0],
@@ -157,30 +117,11 @@ test::ImageStats wrongStats(const RenderScene& scene, int maxDepth, double mpp) 
       Pcg32 acceptRng = chainRng(s.seed, u.index, 1);
       runChain(wrong, target, ChainConfig{}, sink, acceptRng, u.mutations, current, luminance(current.total()), scratch);
     }
-    const std::vector<Color> img = film.develop(std::vector<double>{0.0, chainSplatScale(plan.norm.b, plan.norm.totalMutations, kSize * kSize)});
-    std::vector<double> v(1 + kTiles * kTiles, 0.0);
-    for (int y = 0; y < kSize; ++y)
-      for (int x = 0; x < kSize; ++x) {
-        const double L = luminance(img[size_t(y) * kSize + x]);
-        v[0] += L / (kSize * kSize);
-        v[1 + (y * kTiles / kSize) * kTiles + x * kTiles / kSize] += L * kTiles * kTiles / (kSize * kSize);
-      }
-    values.push_back(v);
+    values.push_back(test::tileMeans(
+        film.develop(std::vector<double>{0.0, chainSplatScale(plan.norm.b, plan.norm.totalMutations, kSize * kSize)}),
+        kSize, kSize, kTiles));
   }
-  test::ImageStats st;
-  st.tilesX = st.tilesY = kTiles;
-  st.n = kRuns;
-  st.mean.assign(values[0].size(), 0);
-  st.stdErr.assign(values[0].size(), 0);
-  for (size_t k = 0; k < values[0].size(); ++k) {
-    double m = 0, sq = 0;
-    for (const auto& v : values) m += v[k];
-    m /= kRuns;
-    for (const auto& v : values) sq += (v[k] - m) * (v[k] - m);
-    st.mean[k] = m;
-    st.stdErr[k] = std::sqrt(sq / (kRuns - 1) / kRuns);
-  }
-  return st;
+  return test::statsOverRuns(values, kTiles);
 }
 
 TEST(VeachChain, DiffuseBox) {
