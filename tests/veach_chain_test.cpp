@@ -53,6 +53,21 @@ SceneDesc glassBox() {
   return d;
 }
 
+// The diffuse box with a mirror for its back wall: the camera sees the box in the mirror (E S D ...) and
+// light reaches surfaces by way of the mirror (... D S L), so paths E S D S L, the multi-chain
+// perturbation's, are common.
+SceneDesc mirrorWallBox() {
+  SceneDesc d = test::smallCornellBox(kSize, kSize);
+  BsdfDesc mirror;
+  mirror.type = BsdfDesc::Type::Conductor;
+  mirror.id = "mirror wall";
+  mirror.mirror = true;
+  d.bsdfs.push_back(mirror);
+  for (MeshDesc& m : d.meshes)
+    if (m.name == "back") m.bsdf = int(d.bsdfs.size()) - 1;
+  return d;
+}
+
 MutationSettings only(std::initializer_list<int> kinds) {
   MutationSettings m;
   for (double& w : m.weight) w = 0;
@@ -151,6 +166,13 @@ TEST(VeachChain, GlassAndMirrorSpheres) {
   const test::ImageStats ref = bdptStats(*scene, 5, 512);
   EXPECT_LT(compare("glass + mirror, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 96, ref), kZ);
   EXPECT_LT(compare("glass + mirror, all", *scene, 5, MutationSettings{}, 96, ref), kZ);
+}
+
+TEST(VeachChain, MirrorWall) {
+  const auto scene = RenderScene::build(mirrorWallBox());
+  const test::ImageStats ref = bdptStats(*scene, 5, 512);
+  EXPECT_LT(compare("mirror wall, bidir + multichain", *scene, 5, only({veach::kBidir, veach::kMultiChain}), 96, ref), kZ);
+  EXPECT_LT(compare("mirror wall, all", *scene, 5, MutationSettings{}, 96, ref), kZ);
 }
 
 TEST(VeachChain, ThinLens) {

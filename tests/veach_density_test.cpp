@@ -19,6 +19,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -271,6 +273,81 @@ TEST(VeachDensity, CausticPerturbation) {
   EXPECT_GE(c.binsTested, 20);
   EXPECT_LT(c.maxZ, kZ);
   EXPECT_EQ(irreversible, 0);
+}
+
+}  // namespace
+}  // namespace mlt
+
+namespace mlt {
+namespace {
+
+// Every proposal with f(y) > 0 has T(x -> y) > 0 and can be undone by the same move (T(y -> x) > 0, the
+// move applicable at y; for the bidirectional mutation unless it deleted a specular vertex of x), for all five moves from many start paths of a scene with glass, mirror
+// and a mirror wall (specular chains on both sides, multi-chain paths E S D S L).
+TEST(VeachDensity, EveryProposalIsReversible) {
+  SceneDesc desc = test::cornellBoxSpecular(16, 16);
+  BsdfDesc mirror;
+  mirror.type = BsdfDesc::Type::Conductor;
+  mirror.mirror = true;
+  desc.bsdfs.push_back(mirror);
+  for (MeshDesc& m : desc.meshes)
+    if (m.name == "back") m.bsdf = int(desc.bsdfs.size()) - 1;
+  const auto scene = RenderScene::build(desc);
+  const PathSpace space(*scene, 6);
+  std::unique_ptr<veach::Mutation> moves[veach::kNumKinds] = {
+      veach::makeBidirMutation(space), veach::makeLensPerturbation(space, 0.1, 2.0),
+      veach::makeCausticPerturbation(space, 1e-4, 0.1), veach::makeMultiChainPerturbation(space, 0.1, 2.0, 1e-4, 0.1),
+      veach::makeLensSubpathMutation(space)};
+  IntegratorSettings integrator;
+  integrator.maxDepth = 6;
+  int proposed[veach::kNumKinds] = {}, irreversible[veach::kNumKinds] = {};
+  Pcg32 rng(17, 3);
+  Path y;
+  for (uint64_t i = 0; i < 3000; ++i) {
+    IndependentSource src(123, i);
+    const auto sp = veach::startPathFromSample(space, integrator, src, 0.5);
+    if (!sp) continue;
+    for (int kind = 0; kind < veach::kNumKinds; ++kind) {
+      if (!moves[kind]->applicable(sp->path)) continue;
+      for (int rep = 0; rep < 4; ++rep) {
+        if (!moves[kind]->propose(sp->path, rng, y) || veach::samePath(sp->path, y)) continue;
+        if (luminance(space.f(y, nullptr)) <= 0) continue;
+        ++proposed[kind];
+        const Path& x = sp->path;
+        // The bidirectional mutation may delete a specular vertex of x, or re-aim a kept one (x_m traced
+        // from again): its reverse would have to make x's specular scattering with both ends of the
+        // changed part fixed, which has probability zero, so T(y -> x) = 0 there (the chain rejects such
+        // y). Every other proposal must be reversible.
+        bool deletedSpecular = false;
+        if (kind == veach::kBidir) {
+          int pre = 0, suf = 0;
+          while (pre <= std::min(x.k(), y.k()) && x.v[pre].samePoint(y.v[pre])) ++pre;
+          while (suf <= std::min(x.k(), y.k()) && x.v[x.k() - suf].samePoint(y.v[y.k() - suf])) ++suf;
+          for (int j = std::max(0, pre - 1); j <= std::min(x.k(), x.k() - suf + 1); ++j) deletedSpecular |= x.v[j].specular;
+        }
+        const bool forward = moves[kind]->density(x, y) > 0;
+        const bool backward = moves[kind]->density(y, x) > 0 && moves[kind]->applicable(y);
+        if (!forward || (!backward && !deletedSpecular)) {
+          ++irreversible[kind];
+          if (getenv("VEACH_DEBUG")) {
+            auto show = [](const Path& p) {
+              std::string o;
+              for (const auto& v : p.v)
+                o += v.kind == veach::VertexKind::Light ? "L" : v.kind == veach::VertexKind::Camera ? "E" : (v.specular ? "S" : "D");
+              return o;
+            };
+            std::printf("kind %d: x %s y %s fwd %d bwd %d\n", kind, show(x).c_str(), show(y).c_str(), int(forward), int(backward));
+          }
+        }
+      }
+    }
+  }
+  for (int kind = 0; kind < veach::kNumKinds; ++kind) {
+    std::printf("%s: %d proposals with f > 0, %d irreversible\n", veach::mutationKindNames()[kind].c_str(),
+                proposed[kind], irreversible[kind]);
+    EXPECT_GT(proposed[kind], 10) << veach::mutationKindNames()[kind];
+    EXPECT_EQ(irreversible[kind], 0) << veach::mutationKindNames()[kind];
+  }
 }
 
 }  // namespace

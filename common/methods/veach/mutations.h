@@ -10,9 +10,9 @@
 //                E S* D with the same lobes, connect to the kept x_{m-1} (ES*D(D|L), sec. 11.4.3.1).
 //  caustic       perturb the direction leaving x_j by an exponential angle in [theta1, theta2], retrace
 //                S* toward the eye, connect to the kept lens point ((D|L) S* D E, sec. 11.4.3.2).
-//  multichain    lens perturbation through E S+ D S+ ... : each later chain leaves its diffuse vertex with
-//                the direction perturbed by the same rotation as the incoming direction
-//                (sec. 11.4.3.3) -- not implemented (applicable() is false).
+//  multichain    lens perturbation continued through E S+ D (S+ D)* (D|L): at each diffuse vertex whose
+//                light-side neighbour is specular, x's outgoing direction turned by an exponential angle
+//                in [theta1, theta2], the next chain retraced with x's lobes (sec. 11.4.3.3).
 //  lens-subpath  replace the eye subpath E S* D by a fresh one through a uniform film position (sec. 11.4.4).
 //
 // Specular chains traced from the eye are in the canonical measure of path.h; those traced from the light
@@ -34,7 +34,7 @@ const std::vector<std::string>& mutationKindNames();
 struct MutationSettings {
   // Selection weights; a move inapplicable to the current path is skipped (its weight removed), and the
   // probability of the chosen move enters T (veach_chain.h).
-  double weight[kNumKinds] = {1.0, 1.0, 1.0, 0.0, 1.0};
+  double weight[kNumKinds] = {1.0, 1.0, 1.0, 1.0, 1.0};
   double r1 = 0.1;          // lens perturbation: step in pixels, exponential in [r1, r2]
   double r2 = 0;            // 0: 5% of sqrt(film pixels)
   double theta1 = 1e-4;     // caustic perturbation: angle in radians, exponential in [theta1, theta2]
@@ -55,6 +55,8 @@ std::unique_ptr<Mutation> makeBidirMutation(const PathSpace& space);
 std::unique_ptr<Mutation> makeLensPerturbation(const PathSpace& space, double r1, double r2);
 std::unique_ptr<Mutation> makeCausticPerturbation(const PathSpace& space, double theta1, double theta2);
 std::unique_ptr<Mutation> makeLensSubpathMutation(const PathSpace& space);
+std::unique_ptr<Mutation> makeMultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1,
+                                                     double theta2);
 
 // ---- shared helpers -----------------------------------------------------------------------------------
 // The eye chain E S* D: the index m of the first non-specular vertex seen from the lens (x_{k-1}, x_{k-2},
