@@ -67,8 +67,7 @@ int64_t parseJobId(const std::string& jobId) {
 }
 
 uint64_t Coordinator::unitWork(const JobPlan& plan, const WorkUnit& u) {
-  if (isMarkovChainMethod(plan.settings.method)) return u.mutations;
-  return uint64_t(u.sampleEnd - u.sampleBegin) * uint64_t(plan.settings.width) * uint64_t(plan.settings.height);
+  return findMethod(plan.settings.method).unitWork(plan, u);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -95,7 +94,7 @@ Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) 
       wire::SubmittedSettings sub = wire::fromProto(ps);
       RenderSettings s = sub.settings;
       job.defines = sub.defines;
-      job.status.method = methodName(s.method);
+      job.status.method = s.method;
       job.status.width = s.width;
       job.status.height = s.height;
       if (!rec.plan.empty()) job.plan = std::make_shared<JobPlan>(wire::parseJobPlan(rec.plan));
@@ -259,12 +258,10 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   if (!isMarkovChainMethod(s.method) && double(s.spp) * pixels > kMaxTotalWork)
     throw FarmError(Code::InvalidArgument, fmt::format("settings.spp: {} x {} pixels exceeds the limit {:.0e}", s.spp,
                                                        pixels, kMaxTotalWork));
-  if (isMarkovChainMethod(s.method)) {
-    try {
-      validateMarkovChainSettings(s);  // e.g. mmlt with the scene's unlimited depth: refused now, not at planning
-    } catch (const std::invalid_argument& e) {
-      throw FarmError(Code::InvalidArgument, e.what());
-    }
+  try {
+    findMethod(s.method).validate(s);  // e.g. mmlt with the scene's unlimited depth: refused now, not at planning
+  } catch (const std::invalid_argument& e) {
+    throw FarmError(Code::InvalidArgument, e.what());
   }
   buildRenderScene(desc, s.width, s.height);  // throws InvalidArgument naming the element
 
@@ -284,7 +281,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   job.status.jobId = formatJobId(rec.id);
   job.status.name = rec.name;
   job.status.priority = rec.priority;
-  job.status.method = methodName(s.method);
+  job.status.method = s.method;
   job.status.sceneHash = hash;
   job.status.width = s.width;
   job.status.height = s.height;
@@ -636,7 +633,7 @@ void Coordinator::planOne(int64_t id) {
   std::string error;
   try {
     auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
-    spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, methodName(settings.method),
+    spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
                  settings.bootstrapSamples);
     plan = std::make_shared<JobPlan>(planJob(*scene, settings));
     spdlog::info("job={} event=bootstrap_done b={} b_stderr={} units={} seconds={:.3f}", jobId, plan->norm.b,

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 
 namespace mltfarm::v1 {}  // the wire's protobuf package (proto/mltfarm.proto)
 namespace mlt {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "coordinator/farm_types.h"
 
 namespace mlt::farm {

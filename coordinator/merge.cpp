@@ -2,7 +2,7 @@
 #include "coordinator/merge.h"
 
 #include "common/job/executor.h"
-#include "common/job/image_metadata.h"
+#include "common/methods/image_metadata.h"
 
 #include <algorithm>
 #include <fmt/format.h>
@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "common/io/png_io.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/chain_report.h"
 #include "proto/convert.h"
 
 namespace mlt::farm {
@@ -93,7 +93,7 @@ void writePartialExr(const std::string& path, const JobIdentity& id, const JobPl
   m.strings["farm.job"] = id.jobId;
   m.strings["farm.sceneHash"] = id.sceneHash;
   m.strings["farm.scene"] = id.scene;
-  m.strings["farm.method"] = methodName(plan.settings.method);
+  m.strings["farm.method"] = plan.settings.method;
   m.strings["farm.plan"] = toHex(wire::jobPlanBytes(plan));
   m.strings["farm.partial"] = toHex(wire::partialHeaderBytes(result));  // the raw sums are the EXR's channels
   m.strings["farm.unitList"] = unitList(result.units);
@@ -156,7 +156,7 @@ void mergePartialExrs(const std::vector<std::string>& parts, const std::string& 
     if (p.id.jobId != first.id.jobId) mismatch("job", first.id.jobId, p.id.jobId);
     if (p.id.sceneHash != first.id.sceneHash) mismatch("scene hash", first.id.sceneHash, p.id.sceneHash);
     if (p.plan.settings.method != first.plan.settings.method)
-      mismatch("method", methodName(first.plan.settings.method), methodName(p.plan.settings.method));
+      mismatch("method", first.plan.settings.method, p.plan.settings.method);
     if (p.plan.settings.width != first.plan.settings.width || p.plan.settings.height != first.plan.settings.height)
       mismatch("size", fmt::format("{}x{}", first.plan.settings.width, first.plan.settings.height),
                fmt::format("{}x{}", p.plan.settings.width, p.plan.settings.height));

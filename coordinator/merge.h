@@ -16,7 +16,7 @@
 
 #include "common/io/exr_io.h"
 #include "common/job/executor.h"  // emptyPartial, runUnits
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 
 namespace mlt::farm {
 

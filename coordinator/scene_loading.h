@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "common/scene/scene_desc.h"
 

@@ -1,6 +1,8 @@
 // Wire <-> domain conversion with range validation (see convert.h).
 #include "proto/convert.h"
 
+#include "common/methods/registry.h"
+
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
@@ -71,7 +73,7 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
   const bool hasSize = sub.hasSize, hasMaxDepth = sub.hasMaxDepth, hasRrDepth = sub.hasRrDepth;
   v1::RenderSettings p;
   p.set_has_spp(sub.hasSpp);
-  p.set_method(methodName(s.method));
+  p.set_method(s.method);
   p.set_seed(s.seed);
   p.set_width(s.width);
   p.set_height(s.height);
@@ -81,18 +83,28 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
   p.set_has_max_depth(hasMaxDepth);
   p.set_has_rr_depth(hasRrDepth);
   p.set_mis_heuristic(s.integrator.heuristic == MisHeuristic::Balance ? "balance" : "power");
-  p.set_spp(s.spp);
-  p.set_samples_per_unit(s.samplesPerUnit);
-  p.set_mutations_per_pixel(s.mutationsPerPixel);
-  p.set_chains(s.chains);
-  p.set_bootstrap_samples(s.bootstrapSamples);
-  p.set_large_step_prob(s.largeStepProb);
-  p.set_kernel(s.kernel == MutationKernel::Kelemen ? "kelemen" : "gaussian");
-  p.set_kelemen_s1(s.kelemenS1);
-  p.set_kelemen_s2(s.kelemenS2);
-  p.set_gaussian_sigma(s.gaussianSigma);
-  p.set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value" : "kelemen-mis");
-  p.set_separate_direct(s.separateDirect);
+  v1::SampleSettings samples;
+  samples.set_spp(s.spp);
+  samples.set_samples_per_unit(s.samplesPerUnit);
+  // A method this process does not know (the coordinator may know more) travels with sample settings;
+  // the receiver names it if it does not know it either.
+  if (hasMethod(s.method) && isMarkovChainMethod(s.method)) {
+    v1::ChainSettings* c = p.mutable_chains();
+    c->set_mutations_per_pixel(s.mutationsPerPixel);
+    c->set_chains(s.chains);
+    c->set_bootstrap_samples(s.bootstrapSamples);
+    c->set_large_step_prob(s.largeStepProb);
+    c->set_kernel(s.kernel == MutationKernel::Kelemen ? "kelemen" : "gaussian");
+    c->set_kelemen_s1(s.kelemenS1);
+    c->set_kelemen_s2(s.kelemenS2);
+    c->set_gaussian_sigma(s.gaussianSigma);
+    c->set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value" : "kelemen-mis");
+    c->set_separate_direct(s.separateDirect);
+    *c->mutable_direct() = samples;
+  } else {
+    *p.mutable_samples() = samples;
+  }
+  for (const auto& [name, value] : s.params) (*p.mutable_params())[name] = value;
   for (const auto& [name, value] : sub.defines) (*p.mutable_defines())[name] = value;
   return p;
 }
@@ -101,7 +113,8 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
   SubmittedSettings out;
   RenderSettings& s = out.settings;
   try {
-    s.method = parseMethod(p.method());
+    findMethod(p.method());  // a registered method
+    s.method = p.method();
   } catch (const std::exception& e) {
     throw WireError("settings.method", e.what());
   }
@@ -129,31 +142,56 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
   if (p.mis_heuristic() == "balance") s.integrator.heuristic = MisHeuristic::Balance;
   else if (p.mis_heuristic() == "power" || p.mis_heuristic().empty()) s.integrator.heuristic = MisHeuristic::Power;
   else throw WireError("settings.mis_heuristic", fmt::format("unknown '{}' (balance|power)", p.mis_heuristic()));
-  requireRange("settings.spp", p.spp(), 1, kMaxSpp);
-  s.spp = int(p.spp());
-  requireRange("settings.samples_per_unit", p.samples_per_unit(), 0, kMaxSpp);
-  s.samplesPerUnit = int(p.samples_per_unit());
-  requireRange("settings.mutations_per_pixel", p.mutations_per_pixel(), 0.0, kMaxMutationsPerPixel, true);
-  s.mutationsPerPixel = p.mutations_per_pixel();
-  requireRange("settings.chains", p.chains(), 0, kMaxChains);
-  s.chains = int(p.chains());
-  requireRange("settings.bootstrap_samples", p.bootstrap_samples(), 0, kMaxBootstrap);  // 0 = automatic
-  s.bootstrapSamples = int(p.bootstrap_samples());
-  requireRange("settings.large_step_prob", p.large_step_prob(), 0.0, 1.0);
-  s.largeStepProb = float(p.large_step_prob());
-  if (p.kernel() == "kelemen" || p.kernel().empty()) s.kernel = MutationKernel::Kelemen;
-  else if (p.kernel() == "gaussian") s.kernel = MutationKernel::Gaussian;
-  else throw WireError("settings.kernel", fmt::format("unknown '{}' (kelemen|gaussian)", p.kernel()));
-  requireRange("settings.kelemen_s1", p.kelemen_s1(), 0.0, 1.0, true);
-  requireRange("settings.kelemen_s2", p.kelemen_s2(), p.kelemen_s1(), 1.0);
-  requireRange("settings.gaussian_sigma", p.gaussian_sigma(), 0.0, 1.0, true);
-  s.kelemenS1 = float(p.kelemen_s1());
-  s.kelemenS2 = float(p.kelemen_s2());
-  s.gaussianSigma = float(p.gaussian_sigma());
-  if (p.splatting() == "expected-value" || p.splatting().empty()) s.splatting = MltSplatting::ExpectedValue;
-  else if (p.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
-  else throw WireError("settings.splatting", fmt::format("unknown '{}' (expected-value|kelemen-mis)", p.splatting()));
-  s.separateDirect = p.separate_direct();
+  // The family's settings: exactly the group the method reads (the oneof), checked against the method.
+  const bool chainMethod = isMarkovChainMethod(s.method);
+  if (chainMethod && !p.has_chains())
+    throw WireError("settings.chains", fmt::format("method {} needs chain settings", s.method));
+  if (!chainMethod && !p.has_samples())
+    throw WireError("settings.samples", fmt::format("method {} needs sample settings", s.method));
+  const v1::SampleSettings& samples = chainMethod ? p.chains().direct() : p.samples();
+  const std::string sp = chainMethod ? "settings.chains.direct" : "settings.samples";
+  if (!chainMethod || p.chains().separate_direct() || samples.spp() != 0) {
+    requireRange((sp + ".spp").c_str(), samples.spp(), 1, kMaxSpp);
+    s.spp = int(samples.spp());
+  }
+  requireRange((sp + ".samples_per_unit").c_str(), samples.samples_per_unit(), 0, kMaxSpp);
+  s.samplesPerUnit = int(samples.samples_per_unit());
+  if (chainMethod) {
+    const v1::ChainSettings& c = p.chains();
+    requireRange("settings.chains.mutations_per_pixel", c.mutations_per_pixel(), 0.0, kMaxMutationsPerPixel, true);
+    s.mutationsPerPixel = c.mutations_per_pixel();
+    requireRange("settings.chains.chains", c.chains(), 0, kMaxChains);
+    s.chains = int(c.chains());
+    requireRange("settings.chains.bootstrap_samples", c.bootstrap_samples(), 0, kMaxBootstrap);  // 0 = automatic
+    s.bootstrapSamples = int(c.bootstrap_samples());
+    requireRange("settings.chains.large_step_prob", c.large_step_prob(), 0.0, 1.0);
+    s.largeStepProb = float(c.large_step_prob());
+    if (c.kernel() == "kelemen" || c.kernel().empty()) s.kernel = MutationKernel::Kelemen;
+    else if (c.kernel() == "gaussian") s.kernel = MutationKernel::Gaussian;
+    else throw WireError("settings.chains.kernel", fmt::format("unknown '{}' (kelemen|gaussian)", c.kernel()));
+    requireRange("settings.chains.kelemen_s1", c.kelemen_s1(), 0.0, 1.0, true);
+    requireRange("settings.chains.kelemen_s2", c.kelemen_s2(), c.kelemen_s1(), 1.0);
+    requireRange("settings.chains.gaussian_sigma", c.gaussian_sigma(), 0.0, 1.0, true);
+    s.kelemenS1 = float(c.kelemen_s1());
+    s.kelemenS2 = float(c.kelemen_s2());
+    s.gaussianSigma = float(c.gaussian_sigma());
+    if (c.splatting() == "expected-value" || c.splatting().empty()) s.splatting = MltSplatting::ExpectedValue;
+    else if (c.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
+    else throw WireError("settings.chains.splatting",
+                         fmt::format("unknown '{}' (expected-value|kelemen-mis)", c.splatting()));
+    s.separateDirect = c.separate_direct();
+  }
+  if (p.params_size() > 256) throw WireError("settings.params", "more than 256 parameters");
+  for (const auto& [name, value] : p.params()) {
+    if (name.size() > 128 || value.size() > 4096)
+      throw WireError("settings.params", fmt::format("parameter '{}' or its value is too long", name.substr(0, 128)));
+    s.params[name] = value;
+  }
+  try {
+    findMethod(s.method).checkParams(s.params);  // names, types, ranges (the rest is checked at planning)
+  } catch (const std::invalid_argument& e) {
+    throw WireError("settings.params", e.what());
+  }
   out.defines.insert(p.defines().begin(), p.defines().end());
   validateDefines(out.defines, "settings.defines");
   return out;

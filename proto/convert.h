@@ -1,5 +1,5 @@
 // The one conversion file between the wire (proto/mltfarm.proto) and the domain types of
-// common/job/render_job.h. FromProto validates every range and throws WireError naming the field;
+// common/methods/registry.h. FromProto validates every range and throws WireError naming the field;
 // the services turn it into INVALID_ARGUMENT. Nothing outside coordinator/, worker/ and the farm
 // subcommands includes this header.
 #pragma once
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "proto/mltfarm.pb.h"
 
 namespace mlt {

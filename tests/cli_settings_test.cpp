@@ -124,7 +124,7 @@ TEST(CliSettings, SameArgumentsGiveTheSameSettings) {
   expectSame(r, s);
   // And they are the values typed (a parser that dropped an option would still agree with itself).
   const RenderSettings& v = s.settings;
-  EXPECT_EQ(v.method, Method::MMLT);
+  EXPECT_EQ(v.method, "mmlt");
   EXPECT_EQ(v.kernel, MutationKernel::Gaussian);
   EXPECT_EQ(v.gaussianSigma, 0.02f);
   EXPECT_EQ(v.splatting, MltSplatting::KelemenMIS);

@@ -26,7 +26,7 @@ const char* kScene = R"(<scene version="3.0.0">
 const char* kObj = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n";
 
 wire::SubmittedSettings ptWith(std::map<std::string, std::string> defines) {
-  wire::SubmittedSettings s = tinySettings(Method::PT);
+  wire::SubmittedSettings s = tinySettings("pt");
   s.defines = std::move(defines);
   return s;
 }

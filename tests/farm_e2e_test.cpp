@@ -18,12 +18,12 @@ namespace {
 // sums them in another grouping than the in-process renderer (unit by unit).
 constexpr int kManyUnits = 96;
 wire::SubmittedSettings bdptJob() {
-  wire::SubmittedSettings s = tinySettings(Method::BDPT);
+  wire::SubmittedSettings s = tinySettings("bdpt");
   s.settings.spp = kManyUnits;  // one sample per unit
   return s;
 }
 wire::SubmittedSettings mmltJob() {
-  wire::SubmittedSettings s = tinySettings(Method::MMLT);
+  wire::SubmittedSettings s = tinySettings("mmlt");
   s.settings.chains = kManyUnits;
   return s;
 }
@@ -36,7 +36,7 @@ Rendered renderWith(Farm& farm, int workers, const std::string& tag) {
   farm.startCoordinator({"--keep-partials"});
   for (int i = 0; i < workers; ++i) farm.startWorker();
   auto c = farm.client();
-  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus a = c.submit(cornellBox(), tinySettings("pssmlt"));
   JobStatus b = c.submit(cornellBox(), bdptJob());
   JobStatus m = c.submit(cornellBox(), mmltJob());
   EXPECT_EQ(a.jobId, "job-1");
@@ -125,7 +125,7 @@ TEST_F(FarmE2E, BdptPartialSumsAreQuantized) {
   size_t parts = 0, nonZero = 0;
   for (auto& e : fs::directory_iterator(reference_->stateDir + "/jobs/job-2/partials")) {
     const PartialExr p = readPartialExr(e.path().string());
-    ASSERT_EQ(p.plan.settings.method, Method::BDPT);
+    ASSERT_EQ(p.plan.settings.method, "bdpt");
     ++parts;
     for (size_t i = 0; i < p.result.film.pixelCount(); ++i)
       for (double v : {p.result.film.pixelSums()[i].r, p.result.film.pixelSums()[i].g, p.result.film.splatSums()[i].b}) {
@@ -192,7 +192,7 @@ TEST_F(FarmE2E, WorkerKilledMidJobStillGivesByteIdenticalImage) {
   // The doomed worker holds every lease it takes for a while, so it is surely holding one when killed.
   ChildProcess& doomed = farm.startWorker(2, {"--debug-task-delay-ms", "100000"});
   auto c = farm.client();
-  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus a = c.submit(cornellBox(), tinySettings("pssmlt"));
   farm.waitFor(a.jobId, [](const JobStatus& s) { return s.leasedTasks >= 2; });
   farm.startWorker(1);
   farm.waitFor(a.jobId, [](const JobStatus& s) { return s.tasksDone >= 2; });
@@ -211,7 +211,7 @@ TEST_F(FarmE2E, WorkerStoppedWithSigtermReturnsItsLeases) {
   farm.startCoordinator({}, "");
   ChildProcess& slow = farm.startWorker(2, {"--debug-task-delay-ms", "100000"});
   auto c = farm.client();
-  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus a = c.submit(cornellBox(), tinySettings("pssmlt"));
   farm.waitFor(a.jobId, [](const JobStatus& s) { return s.leasedTasks >= 2; });
   EXPECT_EQ(slow.terminate(std::chrono::seconds(20)), 0);
   // Returned at once, not after the lease timeout: nothing is leased any more.
@@ -230,7 +230,7 @@ TEST_F(FarmE2E, CoordinatorKilledAndRestartedResumesWithoutRecomputing) {
   const std::string address = farm.coordinator->address;
   farm.startWorker(1, {"--debug-task-delay-ms", "40"});
   auto c = farm.client();
-  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus a = c.submit(cornellBox(), tinySettings("pssmlt"));
   JobStatus b = c.submit(cornellBox(), bdptJob());
   JobStatus before = farm.waitFor(a.jobId, [](const JobStatus& s) { return s.tasksDone >= 3; });
   ASSERT_EQ(before.state, JobState::Running) << "job finished before the kill; make it longer";

@@ -27,8 +27,8 @@ TEST(FarmFailure, AUnitThatAlwaysThrowsFailsItsJobAfterMaxAttempts) {
   // about a second and `mltfarm watch` below sees the job before it ends.
   farm.startWorker(2, {"--debug-fail-unit", "5", "--debug-task-delay-ms", "300"});
   auto c = farm.client();
-  JobStatus bad = c.submit(cornellBox(), tinySettings(Method::PSSMLT));  // 24 chains: unit 5 exists
-  wire::SubmittedSettings small = tinySettings(Method::BDPT);
+  JobStatus bad = c.submit(cornellBox(), tinySettings("pssmlt"));  // 24 chains: unit 5 exists
+  wire::SubmittedSettings small = tinySettings("bdpt");
   small.settings.spp = 4;  // units 0-3 only: never fails
   JobStatus good = c.submit(cornellBox(), small);
   ChildProcess watch({toolsDir() + "/mltfarm", "watch", bad.jobId, "--coordinator", farm.coordinator->address},
@@ -95,7 +95,7 @@ TEST(FarmFailure, AWorkerKilledRepeatedlyOnTheSameTaskFailsTheJob) {
   Farm farm;
   farm.startCoordinator({"--max-attempts", "2"});  // lease timeout 1.5 s (farm_harness.h)
   auto c = farm.client();
-  JobStatus a = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus a = c.submit(cornellBox(), tinySettings("pssmlt"));
   farm.waitFor(a.jobId, [](const JobStatus& s) { return s.state == JobState::Running; });
   for (uint32_t kill = 1; kill <= 2; ++kill) {
     // Holds its lease without running it, then dies: the lease expires and the task is requeued first.

@@ -19,7 +19,7 @@ TEST(FarmPreview, PreviewOfAcceptedTasksWhileTheJobRuns) {
   // 0..k-1 (one unit each here).
   farm.startWorker(1, {"--debug-task-delay-ms", "150"});
   auto c = farm.client();
-  wire::SubmittedSettings s = tinySettings(Method::PT);
+  wire::SubmittedSettings s = tinySettings("pt");
   s.settings.spp = 16;  // 16 units of one sample per pixel = 16 tasks
   JobStatus a = c.submit(cornellBox(), s);
   const std::string preview = farm.stateDir + "/jobs/" + a.jobId + "/preview.exr";

@@ -47,42 +47,44 @@ TEST(FarmRpc, BadInputGetsTheRightStatusAndOtherJobsKeepRunning) {
   EXPECT_TRUE(c.healthy());
 
   // A good job that must survive everything below.
-  JobStatus good = c.submit(cornellBox(), tinySettings(Method::PSSMLT));
+  JobStatus good = c.submit(cornellBox(), tinySettings("pssmlt"));
 
   // A bundle with a referenced file works (and proves the bundle carries it).
   JobStatus withObj = c.submitBundle({{"scene.xml", kObjScene}, {"meshes/tri.obj", kObj}}, "scene.xml",
-                                     tinySettings(Method::PT));
+                                     tinySettings("pt"));
   EXPECT_EQ(withObj.width, 32);
 
   // Malformed scene: INVALID_ARGUMENT carrying the loader's message (file name).
-  expectRpcError([&] { c.submitBundle({{"broken.xml", "<scene version=\"3.0.0\"><shape"}}, "broken.xml", tinySettings(Method::PT)); },
+  expectRpcError([&] { c.submitBundle({{"broken.xml", "<scene version=\"3.0.0\"><shape"}}, "broken.xml", tinySettings("pt")); },
                  grpc::INVALID_ARGUMENT, "broken.xml", "malformed scene");
   // Missing referenced file.
-  expectRpcError([&] { c.submitBundle({{"scene.xml", kObjScene}}, "scene.xml", tinySettings(Method::PT)); },
+  expectRpcError([&] { c.submitBundle({{"scene.xml", kObjScene}}, "scene.xml", tinySettings("pt")); },
                  grpc::INVALID_ARGUMENT, "tri.obj", "missing referenced file");
   // Scene file not in the bundle; path escaping the bundle.
-  expectRpcError([&] { c.submitBundle({{"scene.xml", kObjScene}}, "other.xml", tinySettings(Method::PT)); },
+  expectRpcError([&] { c.submitBundle({{"scene.xml", kObjScene}}, "other.xml", tinySettings("pt")); },
                  grpc::INVALID_ARGUMENT, "bundle_scene_file", "scene file not in bundle");
-  expectRpcError([&] { c.submitBundle({{"../evil.xml", kObjScene}}, "../evil.xml", tinySettings(Method::PT)); },
+  expectRpcError([&] { c.submitBundle({{"../evil.xml", kObjScene}}, "../evil.xml", tinySettings("pt")); },
                  grpc::INVALID_ARGUMENT, "..", "path escaping the bundle");
   // Absurd parameters.
   auto bad = [&](auto mutate, const std::string& field, const char* what) {
-    wire::SubmittedSettings s = tinySettings(Method::PSSMLT);
+    wire::SubmittedSettings s = tinySettings("pssmlt");
     mutate(s);
     expectRpcError([&] { c.submit(cornellBox(), s); }, grpc::INVALID_ARGUMENT, field, what);
   };
   bad([](auto& s) { s.settings.width = s.settings.height = 0; }, "settings.width", "0x0 film");
-  bad([](auto& s) { s.settings.mutationsPerPixel = 1e9; }, "settings.mutations_per_pixel", "1e9 mutations per pixel");
-  bad([](auto& s) { s.settings.mutationsPerPixel = -4; }, "settings.mutations_per_pixel", "negative mutations");
-  bad([](auto& s) { s.settings.spp = -1; }, "settings.spp", "negative spp");
+  bad([](auto& s) { s.settings.mutationsPerPixel = 1e9; }, "settings.chains.mutations_per_pixel", "1e9 mutations per pixel");
+  bad([](auto& s) { s.settings.mutationsPerPixel = -4; }, "settings.chains.mutations_per_pixel", "negative mutations");
+  bad([](auto& s) { s.settings.spp = -1; }, "settings.chains.direct.spp", "negative spp");
   bad([](auto& s) { s.settings.chains = -3; }, "settings.chains", "negative chains");
   bad([](auto& s) { s.settings.width = -32; }, "settings.width", "negative width");
   bad([](auto& s) { s.settings.integrator.maxDepth = -7; }, "settings.max_depth", "negative depth");
-  bad([](auto& s) { s.settings.largeStepProb = 1.5f; }, "settings.large_step_prob", "probability > 1");
+  bad([](auto& s) { s.settings.largeStepProb = 1.5f; }, "settings.chains.large_step_prob", "probability > 1");
+  bad([](auto& s) { s.settings.method = "metropolis"; }, "settings.method", "unknown method");
+  bad([](auto& s) { s.settings.params["no-such-param"] = "1"; }, "no-such-param", "a parameter pssmlt does not have");
   // mmlt runs chains per path length: a max depth of 0 (no path at all) is refused at submission, not when
   // planning.
   bad([](auto& s) {
-    s.settings.method = Method::MMLT;
+    s.settings.method = "mmlt";
     s.settings.integrator.maxDepth = 0;
     s.hasMaxDepth = true;
   }, "max depth >= 1 or -1", "mmlt with max depth 0");
@@ -91,7 +93,7 @@ TEST(FarmRpc, BadInputGetsTheRightStatusAndOtherJobsKeepRunning) {
   expectRpcError([&] { c.get("nonsense"); }, grpc::NOT_FOUND, "nonsense", "malformed job id");
   expectRpcError([&] { c.fetch("job-999", farm.dir / "x.exr"); }, grpc::NOT_FOUND, "job-999", "fetch unknown job");
   // Cancel twice: the second is FAILED_PRECONDITION.
-  JobStatus victim = c.submit(cornellBox(), tinySettings(Method::BDPT), -5);  // low priority: still queued/running
+  JobStatus victim = c.submit(cornellBox(), tinySettings("bdpt"), -5);  // low priority: still queued/running
   EXPECT_EQ(c.cancel(victim.jobId).state, JobState::Cancelled);
   expectRpcError([&] { c.cancel(victim.jobId); }, grpc::FAILED_PRECONDITION, "already CANCELLED", "cancel twice");
   expectRpcError([&] { c.fetch(victim.jobId, farm.dir / "x.exr"); }, grpc::FAILED_PRECONDITION, "CANCELLED",
@@ -99,7 +101,7 @@ TEST(FarmRpc, BadInputGetsTheRightStatusAndOtherJobsKeepRunning) {
   // Wrong or missing token: UNAUTHENTICATED on every service.
   expectRpcError([&] { farm.client("wrong").get(good.jobId); }, grpc::UNAUTHENTICATED, "token", "wrong token");
   expectRpcError([&] { farm.client("").list(); }, grpc::UNAUTHENTICATED, "token", "no token");
-  expectRpcError([&] { farm.client("wrong").submit(cornellBox(), tinySettings(Method::PT)); }, grpc::UNAUTHENTICATED,
+  expectRpcError([&] { farm.client("wrong").submit(cornellBox(), tinySettings("pt")); }, grpc::UNAUTHENTICATED,
                  "token", "submit with wrong token");
   {
     auto stub = v1::WorkerService::NewStub(farm.client("wrong").channel());

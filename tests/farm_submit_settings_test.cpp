@@ -41,7 +41,7 @@ TEST(FarmSubmitSettings, KernelSplattingAndSeparateDirectReachThePlanAndMatchRen
   for (const auto& e : fs::directory_iterator(farm.stateDir + "/jobs/job-1/partials")) {
     const RenderSettings s = readPartialExr(e.path().string()).plan.settings;
     ++partials;
-    EXPECT_EQ(s.method, Method::MMLT);
+    EXPECT_EQ(s.method, "mmlt");
     EXPECT_EQ(s.kernel, MutationKernel::Gaussian);
     EXPECT_EQ(s.gaussianSigma, 0.02f);
     EXPECT_EQ(s.splatting, MltSplatting::KelemenMIS);

@@ -11,9 +11,9 @@
 #include <memory>
 #include <vector>
 
-#include "common/job/mlt_job.h"
-#include "common/job/render_job.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/pss_method.h"
+#include "common/methods/registry.h"
+#include "common/methods/chain_report.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
 
@@ -25,7 +25,7 @@ const RenderScene& cornell() {
   return *scene;
 }
 
-RenderSettings settingsFor(Method m, uint64_t seed) {
+RenderSettings settingsFor(std::string m, uint64_t seed) {
   RenderSettings s;
   s.method = m;
   s.seed = seed;
@@ -59,16 +59,16 @@ bool sameFilm(const Film& a, const Film& b) {
          a.pixelCounts() == b.pixelCounts();
 }
 
-const Method kMethods[] = {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT};
+const std::string kMethods[] = {"pssmlt", "pssmlt-bdpt", "mmlt"};
 
 TEST(MltJob, SameUnitGivesIdenticalPartialResult) {
-  for (Method m : kMethods) {
+  for (std::string m : kMethods) {
     const JobPlan plan = planJob(cornell(), settingsFor(m, 3));
     ASSERT_FALSE(plan.units.empty());
     for (size_t i : {size_t(0), plan.units.size() - 1}) {
       const PartialResult a = runWorkUnit(cornell(), plan, plan.units[i]);
       const PartialResult b = runWorkUnit(cornell(), plan, plan.units[i]);
-      EXPECT_TRUE(sameFilm(a.film, b.film)) << methodName(m) << " unit " << i;
+      EXPECT_TRUE(sameFilm(a.film, b.film)) << m.c_str() << " unit " << i;
       EXPECT_EQ(a.samples, plan.units[i].mutations);
       EXPECT_EQ(a.stats.acceptedPerKind, b.stats.acceptedPerKind);
       ASSERT_EQ(a.stats.proposedPerKind.size(), mutationKindNames(m).size());
@@ -78,14 +78,14 @@ TEST(MltJob, SameUnitGivesIdenticalPartialResult) {
 }
 
 TEST(MltJob, PlanIsIndependentOfThreadCount) {
-  for (Method m : kMethods) {
+  for (std::string m : kMethods) {
     JobPlan a, b;
     {
       tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
       a = planJob(cornell(), settingsFor(m, 5));
     }
     b = planJob(cornell(), settingsFor(m, 5));
-    EXPECT_EQ(std::memcmp(&a.norm.b, &b.norm.b, sizeof(double)), 0) << methodName(m);
+    EXPECT_EQ(std::memcmp(&a.norm.b, &b.norm.b, sizeof(double)), 0) << m.c_str();
     EXPECT_EQ(a.norm.bk, b.norm.bk);
     ASSERT_EQ(a.units.size(), b.units.size());
     for (size_t i = 0; i < a.units.size(); ++i) {
@@ -97,10 +97,10 @@ TEST(MltJob, PlanIsIndependentOfThreadCount) {
 }
 
 TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
-  for (Method m : kMethods) {
+  for (std::string m : kMethods) {
     RenderSettings s = settingsFor(m, 7);
     s.mutationsPerPixel = 200;  // many splats per pixel: sums whose rounding depends on the grouping
-    if (m == Method::MMLT) s.separateDirect = true;  // include direct-pass units in the merge
+    if (m == "mmlt") s.separateDirect = true;  // include direct-pass units in the merge
     const JobPlan plan = planJob(cornell(), s);
     const std::vector<PartialResult> parts = runAll(cornell(), plan);
     PartialResult sequential;
@@ -115,16 +115,16 @@ TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
     PartialResult reversed;
     for (size_t i = parts.size(); i-- > 0;) reversed.add(parts[i]);
     const std::vector<Color> a = developImage(plan, sequential);
-    EXPECT_TRUE(sameBytes(a, developImage(plan, grouped))) << methodName(m);
-    EXPECT_TRUE(sameBytes(a, developImage(plan, reversed))) << methodName(m);
+    EXPECT_TRUE(sameBytes(a, developImage(plan, grouped))) << m.c_str();
+    EXPECT_TRUE(sameBytes(a, developImage(plan, reversed))) << m.c_str();
     // Stronger: the merged double sums themselves (what a partial EXR stores) are identical.
-    EXPECT_TRUE(sameFilm(sequential.film, grouped.film)) << methodName(m);
-    EXPECT_TRUE(sameFilm(sequential.film, reversed.film)) << methodName(m);
+    EXPECT_TRUE(sameFilm(sequential.film, grouped.film)) << m.c_str();
+    EXPECT_TRUE(sameFilm(sequential.film, reversed.film)) << m.c_str();
   }
 }
 
 TEST(MltJob, ReplayMismatchFailsLoudly) {
-  const JobPlan plan = planJob(cornell(), settingsFor(Method::PSSMLT_BDPT, 9));
+  const JobPlan plan = planJob(cornell(), settingsFor("pssmlt-bdpt", 9));
   WorkUnit u = plan.units[2];
   u.startContribution *= 1.01;
   try {
@@ -139,7 +139,7 @@ TEST(MltJob, ReplayMismatchFailsLoudly) {
 }
 
 TEST(MltJob, MmltAllocatesMutationsProportionallyToBk) {
-  RenderSettings s = settingsFor(Method::MMLT, 11);
+  RenderSettings s = settingsFor("mmlt", 11);
   s.chains = 40;
   const JobPlan plan = planJob(cornell(), s);
   const Normalization& n = plan.norm;
@@ -174,7 +174,7 @@ bool samePlan(const JobPlan& a, const JobPlan& b) {
 // chosen mutations per pixel (what `--mutations-per-pixel` does), and a bootstrap computed with other
 // settings must be refused.
 TEST(MltJob, PlanFromExistingBootstrapEqualsPlanningAfresh) {
-  for (Method m : kMethods) {
+  for (std::string m : kMethods) {
     RenderSettings s = settingsFor(m, 13);
     s.chains = 0;
     s.width = 16;
@@ -182,7 +182,7 @@ TEST(MltJob, PlanFromExistingBootstrapEqualsPlanningAfresh) {
     const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), s);
     for (double mpp : {3.0, 37.2, 1500.0}) {
       s.mutationsPerPixel = mpp;
-      EXPECT_TRUE(samePlan(planMarkovChainJob(cornell(), s, boot), planJob(cornell(), s))) << methodName(m) << " " << mpp;
+      EXPECT_TRUE(samePlan(planMarkovChainJob(cornell(), s, boot), planJob(cornell(), s))) << m.c_str() << " " << mpp;
     }
     RenderSettings other = s;
     other.seed = 14;
@@ -203,7 +203,7 @@ TEST(MltJob, PlanFromExistingBootstrapEqualsPlanningAfresh) {
 // The render summary's numbers: acceptance and per-length counts add up to what the chains report, and
 // the metadata round trip (used to print the summary of a farm render) loses nothing.
 TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
-  const JobPlan plan = planJob(cornell(), settingsFor(Method::MMLT, 15));
+  const JobPlan plan = planJob(cornell(), settingsFor("mmlt", 15));
   PartialResult merged;
   for (const PartialResult& p : runAll(cornell(), plan)) merged.add(p);
   const ChainReport r = makeChainReport(plan, merged);
@@ -269,7 +269,7 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
 
 // Image mean of a render, averaged over `runs` seeds, with its standard error.
 struct MeanSe { double mean, se; };
-MeanSe imageMean(Method m, int chains, int runs, uint64_t seed0) {
+MeanSe imageMean(std::string m, int chains, int runs, uint64_t seed0) {
   std::vector<double> means;
   for (int r = 0; r < runs; ++r) {
     RenderSettings s = settingsFor(m, seed0 + r);
@@ -292,7 +292,7 @@ MeanSe imageMean(Method m, int chains, int runs, uint64_t seed0) {
 TEST(MltJob, ManyShortChainsAgreeWithOneLongChain) {
   // K = 24 chains of M mutations vs 1 chain of 24 M: same expectation. 12 independent runs each; the
   // difference must be within 4.5 combined standard errors (t with ~22 dof: p ~ 2e-4).
-  const MeanSe many = imageMean(Method::PSSMLT, 24, 12, 100), one = imageMean(Method::PSSMLT, 1, 12, 200);
+  const MeanSe many = imageMean("pssmlt", 24, 12, 100), one = imageMean("pssmlt", 1, 12, 200);
   EXPECT_NEAR(many.mean, one.mean, 4.5 * std::hypot(many.se, one.se))
       << "24 chains: " << many.mean << " +- " << many.se << ", 1 chain: " << one.mean << " +- " << one.se;
 }

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "common/core/rng.h"
-#include "common/job/mlt_job.h"
-#include "common/job/render_job.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/pss_method.h"
+#include "common/methods/registry.h"
+#include "common/methods/chain_report.h"
 #include "common/mlt/develop.h"
 #include "common/render/render_scene.h"
 #include "common/sampler/sample_source.h"
@@ -27,7 +27,7 @@ const RenderScene& cornell() {
   return *scene;
 }
 
-RenderSettings settingsFor(Method m, uint64_t seed, double mpp) {
+RenderSettings settingsFor(std::string m, uint64_t seed, double mpp) {
   RenderSettings s;
   s.method = m;
   s.seed = seed;
@@ -113,31 +113,31 @@ TEST(RefinedB, CandidatesSpreadTheirFirstDecisionsAndStayUniform) {
 TEST(RefinedB, LargeStepsSampleTheTargetLikeTheBootstrap) {
   // The large steps' mean of c per path length agrees with the bootstrap's b_k within their combined
   // standard error: a chain that counted accepted large steps only, or c(x) instead of c(y), would not.
-  for (Method m : {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT}) {
+  for (std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt"}) {
     RenderSettings s = settingsFor(m, 21, 1024);
     s.bootstrapSamples = 1 << 16;  // the small light seen directly gives c a large variance here
     const JobPlan plan = planJob(cornell(), s);
     const PartialResult merged = runJob(plan);
     int powerful = 0;  // slots where the comparison could detect a 30% bias
-    ASSERT_EQ(merged.stats.largeStepSums.size(), plan.norm.bootstrapB.size()) << methodName(m);
+    ASSERT_EQ(merged.stats.largeStepSums.size(), plan.norm.bootstrapB.size()) << m.c_str();
     uint64_t large = 0;
     for (size_t slot = 0; slot < plan.norm.bootstrapB.size(); ++slot) {
       const TargetSums& L = merged.stats.largeStepSums[slot];
       const BootstrapEstimate& boot = plan.norm.bootstrapB[slot];
       large += L.n;
       if (boot.n == 0 || boot.b == 0) {
-        EXPECT_EQ(L.n, 0u) << methodName(m) << " slot " << slot << ": no chains, no large steps";
+        EXPECT_EQ(L.n, 0u) << m.c_str() << " slot " << slot << ": no chains, no large steps";
         continue;
       }
       const BEstimate l = pooledB({}, L), b{boot.b, boot.stdErr, boot.n};
-      ASSERT_GT(L.n, 100u) << methodName(m) << " slot " << slot;
+      ASSERT_GT(L.n, 100u) << m.c_str() << " slot " << slot;
       const double se = std::hypot(l.stdErr, b.stdErr);
-      EXPECT_LT(std::fabs(l.b - b.b), 5 * se) << methodName(m) << " slot " << slot << ": large steps " << l.b
+      EXPECT_LT(std::fabs(l.b - b.b), 5 * se) << m.c_str() << " slot " << slot << ": large steps " << l.b
                                                << " +- " << l.stdErr << ", bootstrap " << b.b << " +- " << b.stdErr;
       if (5 * se < 0.3 * b.b) ++powerful;
     }
-    EXPECT_GE(powerful, m == Method::MMLT ? 3 : 1) << methodName(m) << ": the comparison is too weak to fail";
-    EXPECT_EQ(large, merged.stats.proposedPerKind[int(MutationType::Large)]) << methodName(m)
+    EXPECT_GE(powerful, m == "mmlt" ? 3 : 1) << m.c_str() << ": the comparison is too weak to fail";
+    EXPECT_EQ(large, merged.stats.proposedPerKind[int(MutationType::Large)]) << m.c_str()
                                                                              << ": every large step is counted once";
   }
 }
@@ -145,15 +145,15 @@ TEST(RefinedB, LargeStepsSampleTheTargetLikeTheBootstrap) {
 TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
   // Same bootstrap, 64x the mutations: b's standard error falls below the bootstrap's and keeps falling as
   // the job grows, and the combination is never worse than either of its parts (develop.h (D5)).
-  for (Method m : {Method::PSSMLT, Method::MMLT}) {
+  for (std::string m : {"pssmlt", "mmlt"}) {
     const JobPlan small = planJob(cornell(), settingsFor(m, 5, 16));
     const JobPlan big = planJob(cornell(), settingsFor(m, 5, 1024));
     EXPECT_EQ(small.norm.b, big.norm.b) << "one bootstrap for both";
     const ChainReport rs = makeChainReport(small, runJob(small));
     const ChainReport rb = makeChainReport(big, runJob(big));
-    EXPECT_LT(rs.bStdErr, rs.bBootstrapStdErr) << methodName(m) << ": the large steps add information";
-    EXPECT_LT(rb.bStdErr, 0.9 * rs.bStdErr) << methodName(m) << ": " << rb.bStdErr << " vs " << rs.bStdErr;
-    if (m == Method::PSSMLT) {  // one length: compare with the large steps' model variance alone
+    EXPECT_LT(rs.bStdErr, rs.bBootstrapStdErr) << m.c_str() << ": the large steps add information";
+    EXPECT_LT(rb.bStdErr, 0.9 * rs.bStdErr) << m.c_str() << ": " << rb.bStdErr << " vs " << rs.bStdErr;
+    if (m == "pssmlt") {  // one length: compare with the large steps' model variance alone
       const double largeOnly = std::sqrt(big.norm.bootstrapB[0].sampleVar / double(rb.steps("large")));
       EXPECT_LE(rb.bStdErr, std::min(rb.bBootstrapStdErr, largeOnly));
     }
@@ -164,7 +164,7 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
 TEST(RefinedB, ImageIsDevelopedWithTheRefinedB) {
   // Scaling every large-step sum by 2 doubles b_k (and nothing else), so every chain layer's
   // contribution doubles: the image minus its direct pass doubles exactly.
-  RenderSettings s = settingsFor(Method::MMLT, 9, 32);
+  RenderSettings s = settingsFor("mmlt", 9, 32);
   const JobPlan plan = planJob(cornell(), s);
   PartialResult merged = runJob(plan);
   const std::vector<Color> before = developImage(plan, merged);
@@ -188,7 +188,7 @@ TEST(RefinedB, ImageIsDevelopedWithTheRefinedB) {
 }
 
 TEST(RefinedB, LargeStepSumsMergeExactlyInAnyGrouping) {
-  const JobPlan plan = planJob(cornell(), settingsFor(Method::MMLT, 13, 64));
+  const JobPlan plan = planJob(cornell(), settingsFor("mmlt", 13, 64));
   std::vector<PartialResult> parts(plan.units.size());
   for (size_t i = 0; i < parts.size(); ++i) parts[i] = runWorkUnit(cornell(), plan, plan.units[i]);
   PartialResult sequential, grouped;
@@ -204,7 +204,7 @@ TEST(RefinedB, LargeStepSumsMergeExactlyInAnyGrouping) {
 }
 
 TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
-  const JobPlan plan = planJob(cornell(), settingsFor(Method::MMLT, 17, 8));
+  const JobPlan plan = planJob(cornell(), settingsFor("mmlt", 17, 8));
   for (const WorkUnit& u : plan.units) {
     const PartialResult r = runWorkUnit(cornell(), plan, u);
     for (size_t l = 1; l < r.film.splatLayerCount(); ++l)
@@ -213,7 +213,7 @@ TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
 }
 
 TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
-  RenderSettings s = settingsFor(Method::MMLT, 1, 256);
+  RenderSettings s = settingsFor("mmlt", 1, 256);
   s.bootstrapSamples = 0;
   s.width = 256;
   s.height = 256;
@@ -231,7 +231,7 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   s.bootstrapSamples = 777;  // explicit wins
   EXPECT_EQ(bootstrapPerLength(s), 777u);
   // The plan records the resolved size, so that it can be reproduced.
-  RenderSettings auto16 = settingsFor(Method::PSSMLT, 1, 16);
+  RenderSettings auto16 = settingsFor("pssmlt", 1, 16);
   auto16.bootstrapSamples = 0;
   const JobPlan plan = planJob(cornell(), auto16);
   EXPECT_EQ(plan.settings.bootstrapSamples, int(kMinBootstrapPerLength));

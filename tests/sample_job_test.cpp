@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/mlt/develop.h"
 
 namespace mlt {
@@ -20,7 +20,9 @@ namespace {
 // splat of value 1 at a uniformly random film position (the second case lands anywhere on the film).
 class FakeEvaluator final : public PathEvaluator {
  public:
-  FakeEvaluator(int w, int h) : w_(w), h_(h) {}
+  // splatsOnly: a light tracer's evaluator (every splat goes to the splat sums), like lt's.
+  FakeEvaluator(int w, int h, bool splatsOnly = false) : w_(w), h_(h), splatsOnly_(splatsOnly) {}
+  bool splatsOnly() const override { return splatsOnly_; }
   void evaluate(SampleSource& src, const Vec2* pixel, PathContribution& out) const override {
     src.startStream(Stream::Camera);
     const Vec2 u = src.next2D();
@@ -34,9 +36,10 @@ class FakeEvaluator final : public PathEvaluator {
 
  private:
   int w_, h_;
+  bool splatsOnly_;
 };
 
-RenderSettings settingsFor(Method m, int spp, int w, int h) {
+RenderSettings settingsFor(std::string m, int spp, int w, int h) {
   RenderSettings s;
   s.method = m;
   s.spp = spp;
@@ -57,17 +60,22 @@ void expectBitIdentical(const Film& a, const Film& b) {
   }
 }
 
-TEST(JobApi, MethodNamesRoundTrip) {
-  for (Method m : {Method::PT, Method::LT, Method::BDPT, Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT})
-    EXPECT_EQ(parseMethod(methodName(m)), m);
-  EXPECT_THROW(parseMethod("PT"), std::invalid_argument);
-  EXPECT_THROW(parseMethod("metropolis"), std::invalid_argument);
-  EXPECT_FALSE(isMarkovChainMethod(Method::BDPT));
-  EXPECT_TRUE(isMarkovChainMethod(Method::MMLT));
+TEST(JobApi, RegistryFindsEveryBuiltInMethodByName) {
+  for (std::string m : {"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}) EXPECT_EQ(findMethod(m).name(), m);
+  EXPECT_THROW(findMethod("PT"), std::invalid_argument);
+  try {
+    findMethod("metropolis");
+    ADD_FAILURE() << "an unknown method was found";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("metropolis"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("pssmlt-bdpt"), std::string::npos) << e.what();  // lists the names
+  }
+  EXPECT_FALSE(isMarkovChainMethod("bdpt"));
+  EXPECT_TRUE(isMarkovChainMethod("mmlt"));
 }
 
 TEST(JobApi, PlanSplitsSamplesIntoUnitsCoveringEverySampleOnce) {
-  RenderSettings s = settingsFor(Method::PT, 37, 8, 8);
+  RenderSettings s = settingsFor("pt", 37, 8, 8);
   JobPlan auto_ = planSampleJob(s);
   EXPECT_EQ(auto_.settings.samplesPerUnit, 3);  // ceil(37 / 16)
   s.samplesPerUnit = 5;
@@ -85,7 +93,7 @@ TEST(JobApi, PlanSplitsSamplesIntoUnitsCoveringEverySampleOnce) {
 }
 
 TEST(JobApi, PartialResultAddMergesAndRejectsDuplicates) {
-  RenderSettings s = settingsFor(Method::BDPT, 4, 20, 9);
+  RenderSettings s = settingsFor("bdpt", 4, 20, 9);
   s.samplesPerUnit = 1;
   const JobPlan plan = planSampleJob(s);
   const FakeEvaluator eval(20, 9);
@@ -123,7 +131,7 @@ TEST(JobApi, SampleUnitIsBitIdenticalWhateverTheThreadCount) {
   // 40x37: partial tiles at the edges and more than one tile group would need > 64 tiles, so also a
   // wide film.
   for (auto [w, h] : {std::pair{40, 37}, std::pair{300, 70}}) {
-    RenderSettings s = settingsFor(Method::BDPT, 3, w, h);
+    RenderSettings s = settingsFor("bdpt", 3, w, h);
     const JobPlan plan = planSampleJob(s);
     const FakeEvaluator eval(w, h);
     PartialResult one, two;
@@ -146,9 +154,9 @@ TEST(JobApi, SplatsAreNormalizedByPixelsOverLightPaths) {
   //  - the random splats (blue 1, K ~ Binomial(N, 1/2) of them anywhere) add K / N to the image mean:
   //    expectation 1/2, standard error sqrt(N / 4) / N.
   const int w = 16, h = 16, spp = 64;
-  RenderSettings s = settingsFor(Method::LT, spp, w, h);
+  RenderSettings s = settingsFor("lt", spp, w, h);
   const JobPlan plan = planSampleJob(s);
-  const FakeEvaluator eval(w, h);
+  const FakeEvaluator eval(w, h, /*splatsOnly=*/true);
   PartialResult merged;
   for (const WorkUnit& u : plan.units) merged.add(runSampleUnit(eval, plan, u));
   for (size_t i = 0; i < merged.film.pixelCount(); ++i) EXPECT_EQ(merged.film.pixelCounts()[i], 0.0);
@@ -165,7 +173,7 @@ TEST(JobApi, SplatsAreNormalizedByPixelsOverLightPaths) {
 TEST(JobApi, TechniqueImagesSumToTheFullImage) {
   // The stand-in's camera sample is technique (s, t) = (0, 2) and its random splat (1, 1): path length 1.
   const int w = 12, h = 10;
-  RenderSettings s = settingsFor(Method::BDPT, 5, w, h);
+  RenderSettings s = settingsFor("bdpt", 5, w, h);
   const JobPlan plan = planSampleJob(s);
   const FakeEvaluator eval(w, h);
   TechniqueFilms techniques(1, w, h);
@@ -193,7 +201,8 @@ TEST(JobApi, TechniqueImagesSumToTheFullImage) {
 // unquantized units depend on the order of additions.
 class WideRangeEvaluator final : public PathEvaluator {
  public:
-  WideRangeEvaluator(int w, int h) : w_(w), h_(h) {}
+  WideRangeEvaluator(int w, int h, bool splatsOnly = false) : w_(w), h_(h), splatsOnly_(splatsOnly) {}
+  bool splatsOnly() const override { return splatsOnly_; }
   void evaluate(SampleSource& src, const Vec2* pixel, PathContribution& out) const override {
     src.startStream(Stream::Camera);
     const Vec2 u = src.next2D();
@@ -207,6 +216,7 @@ class WideRangeEvaluator final : public PathEvaluator {
 
  private:
   int w_, h_;
+  bool splatsOnly_;
 };
 
 // Sample units merge exactly: any grouping of the same units (one by one, as `--in-process` does, or in
@@ -214,12 +224,12 @@ class WideRangeEvaluator final : public PathEvaluator {
 // multiples of 2^-kQuantumExp.
 TEST(JobApi, AnyGroupingOfSampleUnitsGivesIdenticalBits) {
   const int w = 9, h = 7;
-  for (Method m : {Method::BDPT, Method::LT}) {
+  for (std::string m : {"bdpt", "lt"}) {
     RenderSettings s = settingsFor(m, 12, w, h);
     s.samplesPerUnit = 1;
     const JobPlan plan = planSampleJob(s);
     ASSERT_EQ(plan.units.size(), 12u);
-    const WideRangeEvaluator eval(w, h);
+    const WideRangeEvaluator eval(w, h, /*splatsOnly=*/m == "lt");
     std::vector<PartialResult> units;
     for (const WorkUnit& u : plan.units) units.push_back(runSampleUnit(eval, plan, u));
     for (const PartialResult& r : units)
@@ -252,10 +262,10 @@ TEST(JobApi, AnyGroupingOfSampleUnitsGivesIdenticalBits) {
       }
       EXPECT_EQ(oneByOne.samples, grouped.samples);
       const std::vector<Color> a = developSampleImage(plan, oneByOne), b = developSampleImage(plan, grouped);
-      ASSERT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0) << methodName(m);
+      ASSERT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0) << m.c_str();
     }
     // The pixel counts stay exact integers.
-    for (double c : oneByOne.film.pixelCounts()) EXPECT_EQ(c, m == Method::LT ? 0.0 : 12.0);
+    for (double c : oneByOne.film.pixelCounts()) EXPECT_EQ(c, m == "lt" ? 0.0 : 12.0);
   }
 }
 
@@ -272,7 +282,7 @@ class HugeEvaluator final : public PathEvaluator {
 };
 
 TEST(JobApi, SampleUnitBeyondTheExactMergingRangeKeepsTheValue) {
-  RenderSettings s = settingsFor(Method::PT, 1, 4, 4);
+  RenderSettings s = settingsFor("pt", 1, 4, 4);
   const JobPlan plan = planSampleJob(s);
   const HugeEvaluator eval;
   const PartialResult r = runSampleUnit(eval, plan, plan.units[0]);

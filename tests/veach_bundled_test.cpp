@@ -48,7 +48,7 @@ TEST_P(VeachBundled, AgreesWithBdpt) {
   s.chains = 16;
   std::string acceptance;
   const test::ImageStats mlt = test::veachStats(*scene, s, veach::MutationSettings{}, kRuns, kTiles, 1000, &acceptance);
-  const auto bdpt = makeEvaluator(*scene, Method::BDPT, s.integrator);
+  const auto bdpt = makeEvaluator(*scene, "bdpt", s.integrator);
   const test::ImageStats ref = test::estimateImage(*bdpt, kRes, kRes, 777, uint64_t(kRes) * kRes * 512, kTiles, kTiles);
   int where = 0;
   const double z = test::maxZ(mlt, ref, &where);

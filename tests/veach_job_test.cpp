@@ -4,9 +4,12 @@
 // is the pssmlt-bdpt bootstrap; unsupported settings and scenes are refused with a message.
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cstring>
 #include <stdexcept>
 
+#include "common/methods/image_metadata.h"
+#include "common/methods/registry.h"
 #include "common/methods/veach/veach_job.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
@@ -71,11 +74,48 @@ TEST(VeachJob, PlanIsThePssmltBdptBootstrap) {
   const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
   RenderSettings s = smallSettings();
   const JobPlan veachPlan = veach::planVeachJob(*scene, s);
-  s.method = Method::PSSMLT_BDPT;
+  s.method = "pssmlt-bdpt";
   const JobPlan pss = planJob(*scene, s);
   EXPECT_EQ(veachPlan.norm.b, pss.norm.b);
   ASSERT_EQ(veachPlan.units.size(), pss.units.size());
   for (size_t i = 0; i < pss.units.size(); ++i) EXPECT_EQ(veachPlan.units[i].startCandidate, pss.units[i].startCandidate);
+}
+
+// Through the registry and the job API, as the CLI and the farm run it: the image is the job functions'
+// image, and the metadata carries the acceptance of each of the five mutations.
+TEST(VeachJob, RegisteredAsVeachMlt) {
+  ASSERT_TRUE(hasMethod("veach-mlt"));
+  EXPECT_EQ(findMethod("veach-mlt").mutationKinds(), veach::mutationKindNames());
+  EXPECT_TRUE(isMarkovChainMethod("veach-mlt"));
+  const auto scene = RenderScene::build(test::cornellBoxSpecular(16, 16));
+  RenderSettings s = smallSettings();
+  s.method = "veach-mlt";
+  const JobPlan plan = planJob(*scene, s);
+  PartialResult merged, direct;
+  for (const WorkUnit& u : plan.units) {
+    merged.add(runWorkUnit(*scene, plan, u));
+    direct.add(veach::runVeachChain(*scene, plan, u, veach::MutationSettings{}));
+  }
+  const std::vector<Color> a = developImage(plan, merged), b = veach::developVeachImage(plan, direct);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
+  const ImageMetadata m = imageMetadata(plan, merged, "test scene", "0");
+  for (const std::string& kind : veach::mutationKindNames()) {
+    std::string key = "acceptance" + kind;
+    key[10] = char(std::toupper(key[10]));
+    EXPECT_TRUE(m.numbers.count(key)) << key;
+  }
+  EXPECT_GT(m.numbers.at("acceptanceBidir"), 0.1);
+  // A parameter of the method changes the chains: only the bidirectional mutation.
+  s.params["veach-lens"] = "0";
+  s.params["veach-caustic"] = "0";
+  s.params["veach-multichain"] = "0";
+  s.params["veach-lens-subpath"] = "0";
+  const JobPlan onlyBidir = planJob(*scene, s);
+  const PartialResult r = runWorkUnit(*scene, onlyBidir, onlyBidir.units[0]);
+  EXPECT_EQ(r.stats.proposedPerKind[veach::kBidir], onlyBidir.units[0].mutations);
+  s.params["veach-bidir"] = "0";
+  EXPECT_THROW(planJob(*scene, s), std::invalid_argument);  // not ergodic
 }
 
 TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {

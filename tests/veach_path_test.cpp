@@ -17,7 +17,7 @@
 #include "common/integrators/bdpt.h"
 #include "common/methods/veach/path.h"
 #include "common/methods/veach/veach_chain.h"
-#include "common/mlt/method_target.h"
+#include "common/integrators/evaluators.h"
 #include "common/mlt/target.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
@@ -118,12 +118,12 @@ TEST(VeachPath, StartPathReplaysTheBootstrapValue) {
   IntegratorSettings integrator;
   integrator.maxDepth = 6;
   const PathSpace space(*scene, integrator.maxDepth);
-  MethodTarget target(*scene, Method::PSSMLT_BDPT, integrator, false);
+  const auto bdpt = makeEvaluator(*scene, "bdpt", integrator);  // pssmlt-bdpt's target
   PathContribution pc;
   int started = 0, carrying = 0;
   for (uint64_t i = 0; i < 400; ++i) {
     IndependentSource a = IndependentSource::candidate(7, i), b = IndependentSource::candidate(7, i);
-    target.evaluate(a, -1, pc);
+    bdpt->evaluate(a, nullptr, pc);
     const double c = targetFunction(pc);
     const std::optional<veach::StartPath> sp = veach::startPathFromSample(space, integrator, b, 0.37);
     if (c > 0) ++carrying;

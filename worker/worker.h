@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "coordinator/client.h"
 #include "coordinator/farm_types.h"

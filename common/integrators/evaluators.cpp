@@ -63,20 +63,15 @@ void LightTracer::evaluate(SampleSource& source, const Vec2* pixel, PathContribu
   }
 }
 
-std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, Method method,
+std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, const std::string& name,
                                              const IntegratorSettings& settings) {
   if (settings.maxDepth < -1)
     throw std::invalid_argument("integrator: maxDepth must be >= -1 (-1 = unlimited), got " +
                                 std::to_string(settings.maxDepth));
-  switch (method) {
-    case Method::PT: return std::make_unique<PathTracer>(scene, settings);
-    case Method::LT: return std::make_unique<LightTracer>(scene, settings);
-    case Method::BDPT: return std::make_unique<BdptEvaluator>(scene, settings);
-    default: break;
-  }
-  // (methodName lives in the job library, which links after this one: no call to it here.)
-  throw std::invalid_argument("makeEvaluator: method #" + std::to_string(static_cast<int>(method)) +
-                              " is a Markov chain method, not a sample-based path evaluator (pt, lt, bdpt)");
+  if (name == "pt") return std::make_unique<PathTracer>(scene, settings);
+  if (name == "lt") return std::make_unique<LightTracer>(scene, settings);
+  if (name == "bdpt") return std::make_unique<BdptEvaluator>(scene, settings);
+  throw std::invalid_argument("makeEvaluator: '" + name + "' is not a path evaluator (pt, lt, bdpt)");
 }
 
 }  // namespace mlt

@@ -10,14 +10,15 @@
 //         camera sample), t = 1 splats land anywhere (splat buffer, scale P / N).
 #pragma once
 #include <memory>
+#include <string>
 
 #include "common/integrators/path_evaluator.h"
-#include "common/job/render_job.h"
 
 namespace mlt {
 
-// Throws std::invalid_argument for Markov chain methods (they wrap an evaluator, see common/mlt).
-std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, Method method,
+// The evaluators by name: "pt", "lt" or "bdpt" (the methods pt, lt and bdpt, and the evaluators the
+// Markov chain methods wrap). Throws std::invalid_argument for another name or a max depth < -1.
+std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, const std::string& name,
                                              const IntegratorSettings& settings);
 
 class BdptEvaluator final : public PathEvaluator {
@@ -34,6 +35,7 @@ class LightTracer final : public PathEvaluator {
  public:
   LightTracer(const RenderScene& scene, const IntegratorSettings& settings) : scene_(scene), settings_(settings) {}
   void evaluate(SampleSource& source, const Vec2* pixel, PathContribution& out) const override;
+  bool splatsOnly() const override { return true; }
 
  private:
   const RenderScene& scene_;

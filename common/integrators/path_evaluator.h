@@ -7,6 +7,7 @@
 #include "common/core/color.h"
 #include "common/core/vec.h"
 #include "common/sampler/sample_source.h"
+#include "common/settings/render_settings.h"  // IntegratorSettings
 
 namespace mlt {
 
@@ -30,20 +31,15 @@ struct PathContribution {
   }
 };
 
-enum class MisHeuristic { Balance, Power };
-
-struct IntegratorSettings {
-  int maxDepth = 5;           // maximum number of path segments (edges); -1 = unlimited
-  int rrDepth = 5;            // Russian roulette starts after this many segments
-  MisHeuristic heuristic = MisHeuristic::Power;
-};
-
 class PathEvaluator {
  public:
   virtual ~PathEvaluator() = default;
   // pixel: if set, the raster position is pixel + (first two camera numbers) (stratified local rendering);
   // otherwise the first two camera numbers span the whole film (Markov chains).
   virtual void evaluate(SampleSource& source, const Vec2* pixel, PathContribution& out) const = 0;
+  // true: every splat lands anywhere on the film (a light tracer); false: splats with t >= 2 (or pt's
+  // t < 0) are the camera sample's pixel estimate. Decides how a sample batch bins them (sample_job.h).
+  virtual bool splatsOnly() const { return false; }
 };
 
 }  // namespace mlt

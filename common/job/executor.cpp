@@ -45,17 +45,4 @@ PartialResult emptyPartial(const JobPlan& plan) {
   return r;
 }
 
-bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
-              const std::atomic<bool>* cancel) {
-  if (begin > end || end > plan.units.size())
-    throw std::invalid_argument("runUnits: units [" + std::to_string(begin) + ", " + std::to_string(end) +
-                                ") outside the plan's " + std::to_string(plan.units.size()));
-  out = emptyPartial(plan);
-  UnitExecution e;
-  e.issue = [&](size_t i) { return begin + i < end && !(cancel && cancel->load()); };
-  e.run = [&](size_t i) { return runWorkUnit(scene, plan, plan.units[begin + i]); };
-  e.merge = [&](size_t, PartialResult& r) { out.add(r); };
-  return executeUnits(e) == size_t(end - begin);
-}
-
 }  // namespace mlt

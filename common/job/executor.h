@@ -5,13 +5,14 @@
 //   issuing; a unit in flight always finishes), run with up to `parallelism` in flight, and handed to
 //   merge(i, result) strictly in index order,
 // so the merged sums, and the image's bits, never depend on the thread count or on timing.
+// runUnits (common/methods/registry.h) runs a range of a plan's units through it.
 #pragma once
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
 
 namespace mlt {
 
@@ -27,10 +28,5 @@ size_t executeUnits(const UnitExecution& e);
 
 // A zero partial result with the plan's film size (what units are summed into).
 PartialResult emptyPartial(const JobPlan& plan);
-
-// Units [begin, end) of `plan`, one after another, summed in index order into a zero partial of the
-// plan's film size. Returns false (result incomplete) if `cancel` became true between units.
-bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
-              const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace mlt

@@ -16,17 +16,10 @@
 #include "common/mlt/chain.h"
 #include "common/mlt/develop.h"
 #include "common/mlt/kelemen_source.h"
-#include "common/mlt/method_target.h"
+#include "common/integrators/evaluators.h"
 #include "common/mlt/pss_chain.h"
 #include "common/mlt/target.h"
 #include "common/render/render_scene.h"
-
-#if __has_include("common/integrators/evaluators.h")
-#include "common/integrators/evaluators.h"
-#define MLT_JOB_HAVE_EVALUATORS 1
-#else
-#define MLT_JOB_HAVE_EVALUATORS 0
-#endif
 
 namespace mlt {
 
@@ -46,13 +39,15 @@ bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > 
 
 }  // namespace
 
-std::vector<int> chainPathLengths(const RenderSettings& s) {
-  if (s.method != Method::MMLT) return {-1};
+int chainMinLength(bool separateDirect) { return separateDirect ? kDirectMaxSegments + 1 : 1; }
+
+std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& s) {
+  if (!spec.chainsPerLength()) return {-1};
   if (s.integrator.maxDepth == 0 || s.integrator.maxDepth < -1)
-    throw std::invalid_argument("settings: mmlt needs a max depth >= 1 or -1 (unlimited), got " +
+    throw std::invalid_argument("settings: " + spec.name() + " needs a max depth >= 1 or -1 (unlimited), got " +
                                 std::to_string(s.integrator.maxDepth));
   // Unlimited: the first block; the bootstrap adds blocks while they carry light (bootstrapMarkovChainJob).
-  const int kMin = mmltMinLength(s.separateDirect);
+  const int kMin = chainMinLength(s.separateDirect);
   const int kMax = s.integrator.maxDepth < 0 ? kMin + kUnlimitedLengthBlock - 1 : s.integrator.maxDepth;
   std::vector<int> lengths;
   for (int k = kMin; k <= kMax; ++k) lengths.push_back(k);
@@ -69,18 +64,18 @@ KelemenParams kelemenParams(const RenderSettings& s) {
   return p;
 }
 
-uint64_t bootstrapPerLengthFor(const RenderSettings& s, double candidatesAffordable) {
+uint64_t bootstrapPerLengthFor(const ChainJobSpec& spec, const RenderSettings& s, double candidatesAffordable) {
   if (s.bootstrapSamples > 0) return uint64_t(s.bootstrapSamples);
-  const double lengths = double(std::max<size_t>(chainPathLengths(s).size(), 1));
+  const double lengths = double(std::max<size_t>(chainPathLengths(spec, s).size(), 1));
   const double perLength = candidatesAffordable / lengths;
   // A multiple of 64: whole randomization groups, also for a quarter of it (budgeted sizing below).
   const double n = std::floor(std::min(perLength, double(kMaxBootstrapPerLength)) / 64) * 64;
   return std::max(kMinBootstrapPerLength, uint64_t(n));
 }
 
-uint64_t bootstrapPerLength(const RenderSettings& s) {
+uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   const double M = s.mutationsPerPixel * double(s.width) * double(s.height);
-  return bootstrapPerLengthFor(s, std::isfinite(M) && M > 0 ? kBootstrapShare * M : 0.0);
+  return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M : 0.0);
 }
 
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
@@ -108,19 +103,19 @@ namespace {
 JobPlan directPlan(const JobPlan& plan) {
   JobPlan d;
   d.settings = plan.settings;
-  d.settings.method = Method::BDPT;
+  d.settings.method = "bdpt";
   d.settings.integrator.maxDepth = kDirectMaxSegments;
   return d;
 }
 
 // The bootstrap reads these fields of the settings (see MarkovChainBootstrap); a plan may only reuse a
 // bootstrap computed with the same values.
-void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
+void checkBootstrapFits(const ChainJobSpec& spec, const RenderSettings& b, const RenderSettings& s) {
   auto differs = [](const char* field, auto was, auto now) {
     throw std::invalid_argument(fmt::format("settings: {} is {} but the bootstrap was computed with {}", field,
                                             now, was));
   };
-  if (b.method != s.method) differs("method", methodName(b.method), methodName(s.method));
+  if (b.method != s.method) differs("method", b.method, s.method);
   if (b.seed != s.seed) differs("seed", b.seed, s.seed);
   if (b.width != s.width || b.height != s.height)
     differs("film size", fmt::format("{}x{}", b.width, b.height), fmt::format("{}x{}", s.width, s.height));
@@ -129,34 +124,36 @@ void checkBootstrapFits(const RenderSettings& b, const RenderSettings& s) {
   if (b.integrator.heuristic != s.integrator.heuristic)
     differs("MIS heuristic", int(b.integrator.heuristic), int(s.integrator.heuristic));
   if (b.separateDirect != s.separateDirect) differs("separateDirect", b.separateDirect, s.separateDirect);
-  if (bootstrapPerLength(b) != bootstrapPerLength(s))
-    differs("bootstrap samples per length", bootstrapPerLength(b), bootstrapPerLength(s));
+  if (bootstrapPerLength(spec, b) != bootstrapPerLength(spec, s))
+    differs("bootstrap samples per length", bootstrapPerLength(spec, b), bootstrapPerLength(spec, s));
 }
 
 }  // namespace
 
-void validateMarkovChainSettings(const RenderSettings& s) {
-  if (!isMarkovChainMethod(s.method))
-    throw std::invalid_argument(std::string("settings: method ") + methodName(s.method) + " is not a Markov chain method");
+void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& s) {
+  if (s.method != spec.name())
+    throw std::invalid_argument("settings: method is '" + s.method + "', not '" + spec.name() + "'");
   if (s.bootstrapSamples != 0 && s.bootstrapSamples < 2)
     throw std::invalid_argument("settings: bootstrap samples must be >= 2 (or 0: automatic), got " +
                                 std::to_string(s.bootstrapSamples));
   if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
   if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
-  if (s.separateDirect && s.method == Method::PSSMLT)
-    throw std::invalid_argument("settings: separateDirect needs pssmlt-bdpt or mmlt (the path tracer's splats do not carry the path length)");
-  chainPathLengths(s);  // mmlt: a valid max depth
+  if (s.separateDirect && !spec.allowsSeparateDirect())
+    throw std::invalid_argument("settings: " + spec.name() +
+                                " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
+  chainPathLengths(spec, s);  // chains per length: a valid max depth
 }
 
-MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
+MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
+                                             const RenderSettings& settings) {
   const RenderSettings& s = settings;
-  validateMarkovChainSettings(s);
+  validateMarkovChainSettings(spec, s);
 
   MarkovChainBootstrap out;
   out.settings = s;
-  out.settings.bootstrapSamples = int(bootstrapPerLength(s));
-  const std::vector<int> lengths = chainPathLengths(s);
+  out.settings.bootstrapSamples = int(bootstrapPerLength(spec, s));
+  const std::vector<int> lengths = chainPathLengths(spec, s);
   if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
@@ -168,8 +165,8 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
     bc.candidatesPerLength /= 4;
   }
   const uint64_t seed = s.seed;
-  const CandidateFnFactory candidates = [&scene, &s, seed]() -> CandidateFn {
-    auto target = std::make_shared<MethodTarget>(scene, s.method, s.integrator, s.separateDirect);
+  const CandidateFnFactory candidates = [&spec, &scene, &s, seed]() -> CandidateFn {
+    std::shared_ptr<PssTarget> target = spec.makeTarget(scene, s);
     auto path = std::make_shared<PathContribution>();
     return [target, path, seed](uint64_t index, int k) {
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
@@ -178,7 +175,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
     };
   };
   out.result = runBootstrap(bc, candidates);
-  if (s.method != Method::MMLT || s.integrator.maxDepth >= 0) return out;
+  if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
   // Unlimited depth: one more block of lengths while the last one carried more than
   // kNegligibleLengthShare of b (see mlt_job.h). Each block's candidates have slots of their own.
@@ -187,8 +184,8 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
   for (double blockB = all.b; blockB > kNegligibleLengthShare * all.b;) {
     const int next = all.lengths.back().pathLength + 1;
     if (next > kMaxUnlimitedLength) {
-      spdlog::warn("mmlt, unlimited depth: paths longer than {} segments still carry {:.3g} of b; they are dropped",
-                   kMaxUnlimitedLength, blockB / all.b);
+      spdlog::warn("{}, unlimited depth: paths longer than {} segments still carry {:.3g} of b; they are dropped",
+                   spec.name(), kMaxUnlimitedLength, blockB / all.b);
       break;
     }
     bc.firstSlot = all.lengths.size();
@@ -203,24 +200,24 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const Ren
     blockB = block.b;
   }
   all.bStdErr = std::sqrt(var);
-  spdlog::info("mmlt, unlimited depth: path lengths {}..{} (the next {} carried less than {:.0e} of b)",
-               all.lengths.front().pathLength, all.lengths.back().pathLength, kUnlimitedLengthBlock,
+  spdlog::info("{}, unlimited depth: path lengths {}..{} (the next {} carried less than {:.0e} of b)",
+               spec.name(), all.lengths.front().pathLength, all.lengths.back().pathLength, kUnlimitedLengthBlock,
                kNegligibleLengthShare);
   return out;
 }
 
-JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings) {
-  return planMarkovChainJob(scene, settings, bootstrapMarkovChainJob(scene, settings));
+JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, const RenderSettings& settings) {
+  return planMarkovChainJob(spec, scene, settings, bootstrapMarkovChainJob(spec, scene, settings));
 }
 
-JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& settings,
+JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*/, const RenderSettings& settings,
                            const MarkovChainBootstrap& bootstrap) {
   const RenderSettings& s = settings;
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
   KelemenSource validate(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
-  checkBootstrapFits(bootstrap.settings, s);
+  checkBootstrapFits(spec, bootstrap.settings, s);
 
   JobPlan plan;
   plan.settings = s;
@@ -241,7 +238,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, bk) : std::vector<uint64_t>(bk.size(), 0);
   const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
   std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, bk) : std::vector<uint64_t>(bk.size(), 0);
-  if (s.method == Method::MMLT) {
+  if (spec.chainsPerLength()) {
     const int kMax = boot.lengths.empty() ? 0 : boot.lengths.back().pathLength;  // unlimited depth: as bootstrapped
     norm.bk.assign(kMax + 1, 0);
     norm.bkStdErr.assign(kMax + 1, 0);
@@ -254,7 +251,7 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   for (size_t l = 0; l < boot.lengths.size(); ++l) {
     const LengthBootstrap& lb = boot.lengths[l];
     const int slot = lb.pathLength < 0 ? 0 : lb.pathLength;
-    if (s.method == Method::MMLT) {
+    if (spec.chainsPerLength()) {
       norm.bk[slot] = lb.b;
       norm.bkStdErr[slot] = lb.bStdErr;
     }
@@ -288,49 +285,45 @@ JobPlan planMarkovChainJob(const RenderScene& /*scene*/, const RenderSettings& s
   }
   spdlog::info("{}: bootstrap b = {:.6g} +- {:.3g} ({} candidates, {:.3f} s; refined by the chains' large steps), {} "
                "chains, {} mutations ({} per pixel){}",
-               methodName(s.method), norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
+               s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
                s.separateDirect ? ", direct light by bdpt" : "");
   return plan;
 }
 
-PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
+PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   const Normalization& norm = plan.norm;
 
   if (isDirectUnit(unit)) {
     if (!s.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
-#if MLT_JOB_HAVE_EVALUATORS
     const JobPlan d = directPlan(plan);
-    const auto evaluator = makeEvaluator(scene, Method::BDPT, d.settings.integrator);
+    const auto evaluator = makeEvaluator(scene, "bdpt", d.settings.integrator);
     PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
     r.samples = 0;  // samples count mutations in a Markov chain job
     return r;
-#else
-    throw std::runtime_error("separateDirect: path evaluators are not built yet");
-#endif
   }
 
   if (unit.mutations == 0) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " has no mutations");
   const int k = unit.pathLength;
-  if ((s.method == Method::MMLT) != (k >= 1))
+  if (spec.chainsPerLength() != (k >= 1))
     throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": path length " + std::to_string(k) +
-                                " does not fit method " + methodName(s.method));
+                                " does not fit method " + s.method);
   const int slot = k < 0 ? 0 : k;
   if (slot >= int(norm.mutationsPerLength.size()) || norm.mutationsPerLength[slot] == 0)
     throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": the plan has no mutations for path length " + std::to_string(k));
-  const double bChain = s.method == Method::MMLT ? norm.bk[slot] : norm.b;  // Kelemen MIS weights only
+  const double bChain = spec.chainsPerLength() ? norm.bk[slot] : norm.b;  // Kelemen MIS weights only
 
   PartialResult result;
   result.film = Film(s.width, s.height);
   result.units = {unit.index};
   KelemenSource source(kelemenParams(s), s.seed, unit.index, unit.startCandidate);
-  MethodTarget target(scene, s.method, s.integrator, s.separateDirect);
+  const std::unique_ptr<PssTarget> target = spec.makeTarget(scene, s);
 
   // Replay the start candidate (iteration 0 of the source reads IndependentSource(seed, candidate)).
   PathContribution current, scratch;
-  target.evaluate(source, k, current);
+  target->evaluate(source, k, current);
   const double c0 = targetFunction(current);
   if (!(std::fabs(c0 - unit.startContribution) <= kReplayTolerance * std::fabs(unit.startContribution)) || !(c0 > 0))
     throw std::runtime_error(fmt::format(
@@ -339,22 +332,22 @@ PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, cons
         s.seed, unit.index, unit.startCandidate, k, unit.startContribution, c0));
   source.accept();
 
-  PssState state(source);
-  MethodChainTarget chainTarget(target, source, k);
+  const std::unique_ptr<ChainState> state = spec.makeState(source, s);
+  PssChainTarget chainTarget(*target, source, k);
   FilmSink sink(result.film, chainLayer(size_t(slot)));  // scaled by b_k P / M_k only when developed (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
   config.b = bChain;
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
-  const ChainCounts counts = runChain(state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
+  const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 
   quantizeFilm(result.film, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
   st.proposedPerLength.assign(slot + 1, 0);
   st.acceptedPerLength.assign(slot + 1, 0);
-  const size_t kinds = mutationKindNames(s.method).size();
+  const size_t kinds = spec.mutationKinds().size();
   st.proposedPerKind.assign(counts.proposed, counts.proposed + kinds);
   st.acceptedPerKind.assign(counts.accepted, counts.accepted + kinds);
   for (size_t kind = 0; kind < kinds; ++kind) {

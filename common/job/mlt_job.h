@@ -1,16 +1,44 @@
-// The Markov-chain half of the job API (pssmlt, pssmlt-bdpt, mmlt). render_job.cpp dispatches to these
-// for every method with isMarkovChainMethod(method) == true; the sample-based half (pt, lt, bdpt) lives
-// in sample_job.h.
+// Markov chains over primary samples as a job: bootstrap, chain allocation, one chain per work unit,
+// development. Shared by every method of that kind (pssmlt, pssmlt-bdpt, mmlt; their folders under
+// common/methods/ and the base class common/methods/pss_method.h): a method supplies a ChainJobSpec,
+// its target function and its chain state, and this code does the rest the same way for all of them.
 // Implemented in common/job/mlt_job.cpp (with common/mlt/).
 #pragma once
+#include <memory>
+#include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
 #include "common/mlt/bootstrap.h"
+#include "common/mlt/chain.h"
 #include "common/mlt/develop.h"
 #include "common/mlt/kelemen_source.h"
+#include "common/mlt/pss_chain.h"
 
 namespace mlt {
+
+class RenderScene;
+
+// What a primary-sample chain method supplies.
+class ChainJobSpec {
+ public:
+  virtual ~ChainJobSpec() = default;
+  virtual std::string name() const = 0;
+  // true: one path-length slot per length k (chainPathLengths), each with its own b_k and chains (mmlt);
+  // false: one slot (index 0, path length -1) for all lengths.
+  virtual bool chainsPerLength() const = 0;
+  // Whether the target can leave out paths of at most kDirectMaxSegments segments (separateDirect).
+  virtual bool allowsSeparateDirect() const = 0;
+  // The target function; one per thread of the bootstrap and one per chain.
+  virtual std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const = 0;
+  // The chain's state over its Kelemen source; its proposals' kinds index mutationKinds().
+  virtual std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const = 0;
+  virtual std::vector<std::string> mutationKinds() const = 0;
+};
+
+// The shortest path length a per-length method's chains cover: 1, or kDirectMaxSegments + 1 when the
+// direct pass renders the shorter ones (separateDirect).
+int chainMinLength(bool separateDirect);
 
 // The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
 // method, width/height, integrator, separateDirect, bootstrapSamples resolved by bootstrapPerLength).
@@ -18,6 +46,7 @@ namespace mlt {
 // serves plans with any of those (a time-budgeted render plans twice from one bootstrap, with its
 // bootstrapSamples resolved first; see render_local.cpp).
 struct MarkovChainBootstrap {
+  // (Plans reuse a bootstrap of the same method only: checkBootstrapFits compares settings.method.)
   RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples resolved)
   BootstrapResult result;
 };
@@ -35,10 +64,10 @@ constexpr double kBootstrapShare = 0.04;
 constexpr uint64_t kMinBootstrapPerLength = 4096;
 constexpr uint64_t kMaxBootstrapPerLength = uint64_t(1) << 20;
 // Candidates per path length: settings.bootstrapSamples if set, else the automatic size above.
-uint64_t bootstrapPerLength(const RenderSettings& settings);
+uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& settings);
 // As above, for a job expected to run `candidatesAffordable` bootstrap candidates in its bootstrap share
 // (a time budget: measured throughput x budget x kBootstrapShare).
-uint64_t bootstrapPerLengthFor(const RenderSettings& settings, double candidatesAffordable);
+uint64_t bootstrapPerLengthFor(const ChainJobSpec& spec, const RenderSettings& settings, double candidatesAffordable);
 // mmlt with unlimited depth (max depth -1): lengths are bootstrapped in blocks of kUnlimitedLengthBlock
 // from kMin on, until a whole block carries at most kNegligibleLengthShare of b (as the bootstrap
 // measures it), or kMaxUnlimitedLength is reached. Longer paths are left out: a bias of about that share,
@@ -48,9 +77,9 @@ constexpr double kNegligibleLengthShare = 1e-4;
 constexpr int kMaxUnlimitedLength = 1024;
 // The chain's sample-source parameters from the settings (large-step probability, kernel).
 KelemenParams kelemenParams(const RenderSettings& settings);
-// The path lengths a job's chains cover ({-1} for pssmlt methods; kMin..maxDepth for mmlt; for mmlt with
+// The path lengths a job's chains cover ({-1} without chains per length; kMin..maxDepth with them; with
 // unlimited depth the first block, to which the bootstrap adds).
-std::vector<int> chainPathLengths(const RenderSettings& settings);
+std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& settings);
 
 // b per path length slot, pooled from the bootstrap and the large steps merged so far (develop.h (D3),
 // (D4)); total = sum over slots, its standard error from the slots' in quadrature.
@@ -62,17 +91,19 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
 
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.
-void validateMarkovChainSettings(const RenderSettings& settings);
-MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);
+void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& settings);
+MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
+                                             const RenderSettings& settings);
 // Chain allocation from an existing bootstrap: the same plan, bit for bit, as planMarkovChainJob(scene,
 // settings). Throws std::invalid_argument naming the field if `settings` differs from the bootstrap's in
 // a field the bootstrap reads.
-JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings, const MarkovChainBootstrap& boot);
+JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, const RenderSettings& settings,
+                           const MarkovChainBootstrap& boot);
 // Bootstrap (b, bk, candidates), chain allocation: a plan whose units are chains. settings.width/height
 // are already resolved against the scene camera by planJob.
-JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);
+JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, const RenderSettings& settings);
 // Runs one chain (unit.startCandidate, unit.mutations, ...) and returns its raw splat sums + stats.
-PartialResult runMarkovChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
+PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Normalization of the merged chains (b * P / M per length; see mlt/develop.h).
 std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged);
 

@@ -21,13 +21,6 @@
 #include "common/render/render_scene.h"
 #include "common/sampler/sample_source.h"
 
-#if __has_include("common/integrators/evaluators.h")
-#include "common/integrators/evaluators.h"
-#define MLT_HAVE_EVALUATORS 1
-#else
-#define MLT_HAVE_EVALUATORS 0
-#endif
-
 namespace mlt {
 
 namespace {
@@ -82,13 +75,12 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
                             TechniqueFilms* techniques) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
-  if (isMarkovChainMethod(s.method)) throw std::invalid_argument("runSampleUnit: not a sample-based method");
   if (unit.sampleEnd <= unit.sampleBegin || unit.sampleEnd > uint32_t(s.spp))
     throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": sample range [" +
                                 std::to_string(unit.sampleBegin) + ", " + std::to_string(unit.sampleEnd) +
                                 ") is empty or beyond spp " + std::to_string(s.spp));
   const int width = s.width, height = s.height;
-  const bool lightTracing = s.method == Method::LT;
+  const bool lightTracing = evaluator.splatsOnly();  // lt: every splat goes to the splat sums
   PartialResult result;
   result.film = Film(width, height);
   result.units = {unit.index};
@@ -162,16 +154,6 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
   result.samples = uint64_t(unit.sampleEnd - unit.sampleBegin) * film.pixelCount();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
-}
-
-PartialResult runSampleUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
-#if MLT_HAVE_EVALUATORS
-  const std::unique_ptr<PathEvaluator> evaluator = makeEvaluator(scene, plan.settings.method, plan.settings.integrator);
-  return runSampleUnit(*evaluator, plan, unit);
-#else
-  throw std::runtime_error(std::string("method '") + methodName(plan.settings.method) +
-                           "': path evaluators are not built yet");
-#endif
 }
 
 // Development (normalization in one place).

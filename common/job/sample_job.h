@@ -1,4 +1,5 @@
-// The sample-based half of the job API: pt, lt and bdpt as batches of independent pixel samples.
+// Batches of independent pixel samples through a path evaluator: the methods pt, lt and bdpt
+// (common/methods/sample_method.h) and the direct pass of a chain job with separateDirect.
 //
 // Sample indexing (the same however the work is split or scheduled): sample k of pixel (x, y) reads the
 // primary samples IndependentSource(hashKeys(seed, y * width + x), k). A work unit holds samples
@@ -17,7 +18,7 @@
 #pragma once
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
 
 namespace mlt {
 
@@ -28,8 +29,8 @@ class PathEvaluator;
 // because the split decides the order of floating-point additions and so the image's bits.
 constexpr int kAutoSampleUnits = 16;
 JobPlan planSampleJob(const RenderSettings& settings);
-PartialResult runSampleUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
-// Same, with a caller-provided evaluator (tests; the farm's worker keeps one per job).
+// One unit: the plan's samples [unit.sampleBegin, unit.sampleEnd) of every pixel through `evaluator`
+// (the method's: pt, lt, bdpt, or the bdpt direct pass of a chain job).
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit);
 // bdpt only: one film per technique (s, t) with path length L = s + t - 1 in [1, maxLength] (longer
 // paths are left out), for inspecting strategies. Each film holds that technique's MIS-weighted

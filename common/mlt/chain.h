@@ -34,7 +34,7 @@ namespace mlt {
 
 enum class ChainSplatting { ExpectedValue, KelemenMIS };
 
-// A proposal's kind is an index into its method's mutation kind names (render_job.h mutationKindNames:
+// A proposal's kind is an index into its method's mutation kind names (RenderMethod::mutationKinds:
 // pssmlt's "large", "small"; later methods name their own), so statistics are kept per kind without a
 // shared enum.
 constexpr int kMaxMutationKinds = 8;

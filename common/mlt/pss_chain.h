@@ -22,8 +22,32 @@ class PssState final : public ChainState {
   KelemenSource& source_;
 };
 
-// Evaluates a path evaluator on a sample source (the film position comes from the camera stream).
-// (The job uses MethodTarget, method_target.h; this is the minimal adapter for custom evaluators.)
+// The function a primary-sample chain method samples, as a map (sample source, path length) -> path
+// contribution. The bootstrap and the chains call the same object, so a chain's replay of its start
+// candidate reproduces the bootstrap's value bit for bit. Each method supplies its own (pssmlt: the path
+// tracer; pssmlt-bdpt: bdpt; mmlt: one technique per length, common/methods/<name>/).
+class PssTarget {
+ public:
+  virtual ~PssTarget() = default;
+  // pathLength: the chain's path length k for methods with chains per length; -1 otherwise.
+  virtual void evaluate(SampleSource& source, int pathLength, PathContribution& out) = 0;
+};
+
+// ChainTarget adapter: evaluates a PssTarget on a fixed source and length.
+class PssChainTarget final : public ChainTarget {
+ public:
+  PssChainTarget(PssTarget& target, SampleSource& source, int pathLength)
+      : target_(target), source_(source), pathLength_(pathLength) {}
+  void evaluate(PathContribution& out) override { target_.evaluate(source_, pathLength_, out); }
+
+ private:
+  PssTarget& target_;
+  SampleSource& source_;
+  int pathLength_;
+};
+
+// Evaluates a path evaluator on a sample source (the film position comes from the camera stream): the
+// minimal ChainTarget for custom evaluators (tests, benchmarks).
 class EvaluatorTarget final : public ChainTarget {
  public:
   EvaluatorTarget(const PathEvaluator& evaluator, SampleSource& source) : evaluator_(evaluator), source_(source) {}

@@ -28,7 +28,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 wire::SubmittedSettings benchSettings() {
   wire::SubmittedSettings s;
-  s.settings.method = Method::PSSMLT;
+  s.settings.method = "pssmlt";
   s.settings.seed = 3;
   // A few seconds on 2 cores, so that fixed costs (scene loading on each side, process hand-offs,
   // fetching the result) are measured against real work rather than being the whole story.

@@ -19,7 +19,7 @@ namespace {
 
 constexpr int kRes = 256;
 
-void renderFrames(benchmark::State& state, Method method, int maxDepth, bool parallel) {
+void renderFrames(benchmark::State& state, std::string method, int maxDepth, bool parallel) {
   const auto scene = RenderScene::build(test::smallCornellBox(kRes, kRes));
   IntegratorSettings is;
   is.maxDepth = maxDepth;
@@ -52,13 +52,13 @@ void renderFrames(benchmark::State& state, Method method, int maxDepth, bool par
   state.counters["splats/sample"] = double(splats.load()) / samples;
 }
 
-void BM_PathTracer(benchmark::State& state) { renderFrames(state, Method::PT, int(state.range(0)), true); }
-void BM_Bdpt(benchmark::State& state) { renderFrames(state, Method::BDPT, int(state.range(0)), true); }
-void BM_LightTracer(benchmark::State& state) { renderFrames(state, Method::LT, int(state.range(0)), true); }
+void BM_PathTracer(benchmark::State& state) { renderFrames(state, "pt", int(state.range(0)), true); }
+void BM_Bdpt(benchmark::State& state) { renderFrames(state, "bdpt", int(state.range(0)), true); }
+void BM_LightTracer(benchmark::State& state) { renderFrames(state, "lt", int(state.range(0)), true); }
 // One thread, CPU time: samples per CPU-second, robust to other processes sharing the machine
 // (x cores gives the whole-machine figure when the machine is idle).
-void BM_PathTracerOneThread(benchmark::State& state) { renderFrames(state, Method::PT, int(state.range(0)), false); }
-void BM_BdptOneThread(benchmark::State& state) { renderFrames(state, Method::BDPT, int(state.range(0)), false); }
+void BM_PathTracerOneThread(benchmark::State& state) { renderFrames(state, "pt", int(state.range(0)), false); }
+void BM_BdptOneThread(benchmark::State& state) { renderFrames(state, "bdpt", int(state.range(0)), false); }
 
 BENCHMARK(BM_PathTracer)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 BENCHMARK(BM_Bdpt)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);

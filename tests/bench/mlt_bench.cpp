@@ -11,7 +11,7 @@
 
 #include <memory>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
 
@@ -25,7 +25,7 @@ const RenderScene& cornell() {
   return *scene;
 }
 
-JobPlan makePlan(Method m, int maxDepth) {
+JobPlan makePlan(std::string m, int maxDepth) {
   RenderSettings s;
   s.method = m;
   s.integrator.maxDepth = maxDepth;
@@ -35,7 +35,7 @@ JobPlan makePlan(Method m, int maxDepth) {
   return planJob(cornell(), s);
 }
 
-void runChains(benchmark::State& state, Method m, bool parallel) {
+void runChains(benchmark::State& state, std::string m, bool parallel) {
   const JobPlan plan = makePlan(m, int(state.range(0)));
   const size_t n = parallel ? plan.units.size() : 2;
   uint64_t mutations = 0, accepted = 0;
@@ -52,10 +52,10 @@ void runChains(benchmark::State& state, Method m, bool parallel) {
   state.counters["acceptance"] = mutations ? double(accepted) / double(mutations) : 0.0;
 }
 
-void BM_MmltMachine(benchmark::State& s) { runChains(s, Method::MMLT, true); }
-void BM_PssmltBdptMachine(benchmark::State& s) { runChains(s, Method::PSSMLT_BDPT, true); }
-void BM_MmltOneThread(benchmark::State& s) { runChains(s, Method::MMLT, false); }
-void BM_PssmltBdptOneThread(benchmark::State& s) { runChains(s, Method::PSSMLT_BDPT, false); }
+void BM_MmltMachine(benchmark::State& s) { runChains(s, "mmlt", true); }
+void BM_PssmltBdptMachine(benchmark::State& s) { runChains(s, "pssmlt-bdpt", true); }
+void BM_MmltOneThread(benchmark::State& s) { runChains(s, "mmlt", false); }
+void BM_PssmltBdptOneThread(benchmark::State& s) { runChains(s, "pssmlt-bdpt", false); }
 
 BENCHMARK(BM_MmltMachine)->Arg(5)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PssmltBdptMachine)->Arg(5)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -7,9 +7,9 @@
 // recording per mutation: the mutation type, accept/reject, every primary-sample coordinate read
 // (stream, index, value), the path contribution's splats, and every ray traced (Accel's RayObserver).
 // Then, each timed alone on the same chains (single thread, best of the benchmark's iterations):
-//   total       the chain loop as the job runs it: runChain(PssState(KelemenSource), MethodChainTarget,
+//   total       the chain loop as the job runs it: runChain(PssState(KelemenSource), PssChainTarget,
 //               FilmSink) -- what mlt_bench measures per mutation;
-//   eval        the MethodTarget evaluations fed the recorded numbers by a replay source (no mutation
+//   eval        the method's PssTarget evaluations fed the recorded numbers by a replay source (no mutation
 //               arithmetic): rays + BSDF/light evaluation and sampling + integrator bookkeeping;
 //   rays        the recorded rays traced alone through RenderScene::intersect / occluded (Embree);
 //   mutation    a fresh KelemenSource driven through the recorded protocol: startIteration(), the recorded
@@ -39,10 +39,10 @@
 
 #include "common/film/film.h"
 #include "common/job/mlt_job.h"
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/kelemen_source.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/pss_method.h"
 #include "common/mlt/pss_chain.h"
 #include "common/mlt/target.h"
 #include "common/render/accel.h"
@@ -90,7 +90,7 @@ ChainConfig chainConfig(const JobPlan& plan, int k) {  // as runMarkovChain
   ChainConfig c;
   c.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   c.largeStepProb = s.largeStepProb;
-  c.b = s.method == Method::MMLT ? plan.norm.bk[k] : plan.norm.b;
+  c.b = s.method == "mmlt" ? plan.norm.bk[k] : plan.norm.b;
   return c;
 }
 
@@ -173,14 +173,14 @@ void noteEvaluation(RecordedChain& rec, const PathContribution& out) {
 
 class RecordingTarget final : public ChainTarget {
  public:
-  RecordingTarget(MethodTarget& t, SampleSource& s, int k, RecordedChain& rec) : t_(t), s_(s), k_(k), rec_(rec) {}
+  RecordingTarget(PssTarget& t, SampleSource& s, int k, RecordedChain& rec) : t_(t), s_(s), k_(k), rec_(rec) {}
   void evaluate(PathContribution& out) override {
     t_.evaluate(s_, k_, out);
     noteEvaluation(rec_, out);
   }
 
  private:
-  MethodTarget& t_;
+  PssTarget& t_;
   SampleSource& s_;
   int k_;
   RecordedChain& rec_;
@@ -192,7 +192,7 @@ class NullSink final : public ChainSink {
 };
 
 struct MethodData {
-  Method method;
+  std::string method;
   JobPlan plan;
   std::vector<RecordedChain> chains;
   uint64_t mutations = 0, rays = 0, closest = 0, shadow = 0;
@@ -207,7 +207,8 @@ RecordedChain record(const JobPlan& plan, const WorkUnit& unit, uint64_t mutatio
   rec.readBegin = {0};
   rec.splatBegin = {0};
   KelemenSource source(kelemenParams(s), s.seed, unit.index, unit.startCandidate);
-  MethodTarget target(scene, s.method, s.integrator, s.separateDirect);
+  const std::unique_ptr<PssTarget> targetPtr = findPrimarySampleChainMethod(s.method)->makeTarget(scene, s);
+    PssTarget& target = *targetPtr;
   RecordingSource recSource(source, rec.reads);
   RayRecorder rays(rec);
   RayObserver* previous = setThreadRayObserver(&rays);
@@ -230,8 +231,8 @@ RecordedChain record(const JobPlan& plan, const WorkUnit& unit, uint64_t mutatio
   return rec;
 }
 
-MethodData& methodData(Method m) {
-  static std::map<Method, std::unique_ptr<MethodData>> cache;
+MethodData& methodData(std::string m) {
+  static std::map<std::string, std::unique_ptr<MethodData>> cache;
   auto& slot = cache[m];
   if (slot) return *slot;
   slot = std::make_unique<MethodData>();
@@ -269,13 +270,14 @@ double timeTotal(const MethodData& d) {
   double ns = 0;
   for (const RecordedChain& c : d.chains) {
     KelemenSource source(kelemenParams(s), s.seed, c.unit.index, c.unit.startCandidate);
-    MethodTarget target(scene, s.method, s.integrator, s.separateDirect);
+    const std::unique_ptr<PssTarget> targetPtr = findPrimarySampleChainMethod(s.method)->makeTarget(scene, s);
+    PssTarget& target = *targetPtr;
     PathContribution current, scratch;
     target.evaluate(source, c.unit.pathLength, current);
     const double c0 = targetFunction(current);
     source.accept();
     PssState state(source);
-    MethodChainTarget chainTarget(target, source, c.unit.pathLength);
+    PssChainTarget chainTarget(target, source, c.unit.pathLength);
     Film film(s.width, s.height);
     FilmSink sink(film, chainLayer(size_t(std::max(c.unit.pathLength, 0))));  // as the job splats
     Pcg32 acceptRng = chainRng(s.seed, c.unit.index, 1);
@@ -307,7 +309,8 @@ double timeEval(const MethodData& d) {
   const RenderSettings& s = d.plan.settings;
   double ns = 0;
   for (const RecordedChain& c : d.chains) {
-    MethodTarget target(scene, s.method, s.integrator, s.separateDirect);
+    const std::unique_ptr<PssTarget> targetPtr = findPrimarySampleChainMethod(s.method)->makeTarget(scene, s);
+    PssTarget& target = *targetPtr;
     PlaybackSource source;
     PathContribution out;
     out.splats.reserve(64);
@@ -472,10 +475,10 @@ const CoherentRays& coherentRays() {
 
 enum Component { kTotal, kEval, kRays, kMutation, kChainSplat, kChainOnly, kNumComponents };
 const char* kComponentNames[] = {"total", "eval", "rays", "mutation", "chain+splat", "chain only"};
-std::map<Method, double> gBest[kNumComponents];  // best ns per mutation
+std::map<std::string, double> gBest[kNumComponents];  // best ns per mutation
 double gCoherentNs[2] = {0, 0};                  // best ns per ray: camera (closest), shadow
 
-void runComponent(benchmark::State& state, Method m, Component comp) {
+void runComponent(benchmark::State& state, std::string m, Component comp) {
   const MethodData& d = methodData(m);
   double best = 1e300;
   for (auto _ : state) {
@@ -521,9 +524,9 @@ void BM_CoherentRays(benchmark::State& state) {
 BENCHMARK(BM_CoherentRays)->Arg(0)->Arg(1)->ArgName("shadow")->UseManualTime()->Unit(benchmark::kMillisecond);
 
 void registerAll() {
-  for (Method m : {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT})
+  for (std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt"})
     for (int c = 0; c < kNumComponents; ++c)
-      benchmark::RegisterBenchmark((std::string("BM_") + methodName(m) + "/" + kComponentNames[c]).c_str(),
+      benchmark::RegisterBenchmark((std::string("BM_") + m.c_str() + "/" + kComponentNames[c]).c_str(),
                                    [m, c](benchmark::State& s) { runComponent(s, m, Component(c)); })
           ->UseManualTime()
           ->Unit(benchmark::kMillisecond);
@@ -537,7 +540,7 @@ void printTable() {
               "chain loop | film splats | unattributed | rays/mut (closest+shadow) | ns/ray chain / rays_bench-style | "
               "ray floor ns (chain / rays_bench-style) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (Method m : {Method::PSSMLT, Method::PSSMLT_BDPT, Method::MMLT}) {
+  for (std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt"}) {
     bool have = true;
     for (int c = 0; c < kNumComponents; ++c) have = have && gBest[c].count(m);
     if (!have) continue;
@@ -558,7 +561,7 @@ void printTable() {
       floorCoherent = buf;
     }
     std::printf("| %s | %.0f | %s | %s | %s | %s | %s | %s | %.2f (%.2f+%.2f) | %.0f / %s | %.0f / %s |\n",
-                methodName(m), total, cell(rays).c_str(), cell(shading).c_str(), cell(mut).c_str(),
+                m.c_str(), total, cell(rays).c_str(), cell(shading).c_str(), cell(mut).c_str(),
                 cell(chain).c_str(), cell(splat).c_str(), cell(rest).c_str(), perMut,
                 double(d.closest) / double(d.mutations), double(d.shadow) / double(d.mutations), nsPerRayChain,
                 coherent.c_str(), rays, floorCoherent.c_str());

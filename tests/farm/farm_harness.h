@@ -115,7 +115,7 @@ struct Farm {
 };
 
 // Small, fast settings: 32x32, few mutations, fixed seed.
-inline wire::SubmittedSettings tinySettings(Method method) {
+inline wire::SubmittedSettings tinySettings(const std::string& method) {
   wire::SubmittedSettings s;
   s.settings.method = method;
   s.settings.seed = 7;

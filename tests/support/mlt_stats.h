@@ -7,7 +7,7 @@
 #pragma once
 #include <cstdint>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "tests/support/estimates.h"
 
 namespace mlt::test {

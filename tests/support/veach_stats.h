@@ -6,7 +6,8 @@
 #include <cstdint>
 #include <string>
 
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
+#include "common/settings/render_settings.h"
 #include "common/methods/veach/mutations.h"
 #include "tests/support/estimates.h"
 

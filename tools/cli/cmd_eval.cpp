@@ -15,7 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/io/exr_io.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/chain_report.h"
 #include "common/scene/mitsuba_loader.h"
 #include "tools/cli/commands.h"
 #include "tools/eval/harness.h"
@@ -56,7 +56,7 @@ std::string shellQuote(const std::string& s) {
 // --farm: every run is `mltfarm render SCENE --farm ...` in a child process (the command users run: it
 // starts a coordinator and local worker processes, submits, merges, develops), timed from the outside;
 // the image, the work done and the chains' acceptance statistics are read back from the EXR it writes
-// (the chain report keys of common/mlt/chain_report.h; counts are rebuilt from the recorded rates).
+// (the chain report keys of common/methods/chain_report.h; counts are rebuilt from the recorded rates).
 eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& defines, int threads,
                                 const std::string& workDir) {
   std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
@@ -65,7 +65,7 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
     const std::string exr = workDir + "/farm-run.exr", log = workDir + "/farm-run.log";
     std::string cmd = fmt::format(
         "{} render {} -o {} --farm -q -m {} --seed {} --width {} --height {} --max-depth {} --rr-depth {}",
-        shellQuote(self), shellQuote(std::filesystem::absolute(scene.desc.sourceFile).string()), shellQuote(exr), methodName(s.method), s.seed, s.width,
+        shellQuote(self), shellQuote(std::filesystem::absolute(scene.desc.sourceFile).string()), shellQuote(exr), s.method, s.seed, s.width,
         s.height, s.integrator.maxDepth, s.integrator.rrDepth);
     if (isMarkovChainMethod(s.method))
       cmd += fmt::format(
@@ -149,7 +149,7 @@ CommandRun setupEval(CLI::App& sub) {
   auto o = std::make_shared<EvalCliOptions>();
   sub.add_option("--scenes", o->scenes, "Scene files, comma-separated")->required()->delimiter(',');
   sub.add_option("--methods", o->methods,
-                 "Methods, comma-separated: pt, lt, bdpt, pssmlt, pssmlt-bdpt, mmlt. A spec LABEL=METHOD*SCALE "
+                 "Methods, comma-separated (" + methodNameList() + "). A spec LABEL=METHOD*SCALE "
                  "multiplies every image of the method by SCALE (test hook: a deliberately biased method)")
       ->delimiter(',')
       ->capture_default_str();
@@ -238,7 +238,7 @@ CommandRun setupEval(CLI::App& sub) {
     cfg.equalSamples = o->equalSamples;
     cfg.outDir = o->out;
     cfg.userReference = o->reference;
-    cfg.reference.method = parseMethod(o->refMethod);
+    cfg.reference.method = findMethod(o->refMethod).name();
     cfg.reference.spp = o->refSpp;
     cfg.reference.parts = o->refParts;
     cfg.cacheReferences = !o->noCache;

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "common/io/exr_io.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/chain_report.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/farm_render.h"
 #include "tools/cli/render_local.h"

@@ -2,7 +2,7 @@
 #include "tools/cli/render_local.h"
 
 #include "common/job/executor.h"
-#include "common/job/image_metadata.h"
+#include "common/methods/image_metadata.h"
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
@@ -19,9 +19,9 @@
 
 #include "common/integrators/evaluators.h"
 #include "common/io/png_io.h"
-#include "common/job/mlt_job.h"
+#include "common/methods/pss_method.h"
 #include "common/job/sample_job.h"
-#include "common/mlt/chain_report.h"
+#include "common/methods/chain_report.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
 #include "common/scene/scene_hash.h"
@@ -83,13 +83,15 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   // 1. The bootstrap gets kBootstrapShare of the budget (mlt_job.h): a probe of the smallest automatic size
   //    measures the candidates' throughput, and the count that fits is resolved into the settings (and
   //    recorded in the image, so that --bootstrap with it reproduces the image without a budget).
+  const PrimarySampleChainMethod* method = findPrimarySampleChainMethod(s.method);
+  if (!method) throw std::invalid_argument("--time: method " + s.method + " has no time-budgeted planning yet");
   MarkovChainBootstrap boot;
   if (s.bootstrapSamples == 0) {
     RenderSettings probe = s;
     probe.bootstrapSamples = int(kMinBootstrapPerLength);
     boot = bootstrapMarkovChainJob(scene, probe);
     const double perSecond = double(boot.result.candidates) / std::max(boot.result.seconds, 1e-6);
-    s.bootstrapSamples = int(bootstrapPerLengthFor(s, kBootstrapShare * budget * perSecond));
+    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, kBootstrapShare * budget * perSecond));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
       const double probeSeconds = boot.result.seconds;
       boot = bootstrapMarkovChainJob(scene, s);
@@ -114,7 +116,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   double directSeconds = 0;
   if (!directUnits.empty()) {
     const auto t0 = Clock::now();
-    runMarkovChain(scene, trialPlan, directUnits.front());
+    runWorkUnit(scene, trialPlan, directUnits.front());
     directSeconds = std::chrono::duration<double>(Clock::now() - t0).count() * double(directUnits.size()) /
                     double(std::max(threads, 1));
   }
@@ -127,7 +129,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   runPipeline(
       size_t(2 * threads),
       [&](size_t i) { return i < size_t(threads) || Clock::now() < trialEnd; },
-      [&](size_t i) { return runMarkovChain(scene, trialPlan, trialUnits[i % trialUnits.size()]); },
+      [&](size_t i) { return runWorkUnit(scene, trialPlan, trialUnits[i % trialUnits.size()]); },
       [&](size_t, const PartialResult& r) { trialMutations += r.samples; });
   report.trialSeconds = std::chrono::duration<double>(Clock::now() - trialStart).count();
   report.trialMutations = trialMutations;
@@ -224,7 +226,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   const size_t nUnits = plan.units.size();
   std::unique_ptr<ProgressBar> progress;
   if (options.showProgress)
-    progress = std::make_unique<ProgressBar>(std::string("render ") + methodName(settings.method), nUnits,
+    progress = std::make_unique<ProgressBar>(std::string("render ") + settings.method, nUnits,
                                              chains ? 0.0 : settings.timeBudgetSeconds);
 
   // Units are issued in index order (pt/lt/bdpt with a time budget: until the time is up; Markov chains
@@ -237,10 +239,10 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   std::unique_ptr<TechniqueFilms> techniques;
   std::unique_ptr<PathEvaluator> techniqueEvaluator;
   if (options.techniqueImages) {
-    if (plan.settings.method != Method::BDPT) throw std::invalid_argument("--technique-images needs --method bdpt");
+    if (plan.settings.method != "bdpt") throw std::invalid_argument("--technique-images needs --method bdpt");
     const int maxLength = plan.settings.integrator.maxDepth >= 1 ? plan.settings.integrator.maxDepth : 8;
     techniques = std::make_unique<TechniqueFilms>(maxLength, plan.settings.width, plan.settings.height);
-    techniqueEvaluator = makeEvaluator(sceneRef, Method::BDPT, plan.settings.integrator);
+    techniqueEvaluator = makeEvaluator(sceneRef, "bdpt", plan.settings.integrator);
   }
   const auto runStart = Clock::now();
   runPipeline(
@@ -292,7 +294,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
     const std::string trialNote =
         result.chainBudget ? fmt::format(", throughput trial {:.2f} s", result.chainBudget->trialSeconds) : "";
     progress->finish(fmt::format("{}: {}/{} work units in {:.2f} s (bootstrap {:.2f} s = {:.1f}% of the job{}){}",
-                                 methodName(plan.settings.method), merged, nUnits, result.seconds,
+                                 plan.settings.method, merged, nUnits, result.seconds,
                                  plan.norm.bootstrapSeconds,
                                  100 * plan.norm.bootstrapSeconds / std::max(result.seconds, 1e-9), trialNote,
                                  nonFiniteNote));
@@ -307,7 +309,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   } else if (progress) {
     char line[512];
     std::snprintf(line, sizeof line, "%s: %llu samples in %.2f s (%.3g samples/s), %zu/%zu work units%s",
-                  methodName(plan.settings.method), (unsigned long long)result.merged.samples, result.seconds,
+                  plan.settings.method, (unsigned long long)result.merged.samples, result.seconds,
                   double(result.merged.samples) / std::max(result.seconds, 1e-9), merged, nUnits,
                   nonFiniteNote.c_str());
     progress->finish(line);

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "common/io/exr_io.h"
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 
 namespace mlt::cli {
 

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace mlt::cli {
@@ -25,9 +26,13 @@ const CLI::Validator kUnitStep(
 
 RenderSettingsOptions::RenderSettingsOptions(std::string description, std::string name, CLI::App* parent)
     : CLI::Option_group(std::move(description), std::move(name), parent) {
-  add_option("-m,--method", method_, "pt | lt | bdpt | pssmlt | pssmlt-bdpt | mmlt")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"}));
+  std::vector<std::string> names;
+  std::string methodHelp = "The rendering method:";
+  for (const RenderMethod* m : allMethods()) {
+    names.push_back(m->name());
+    methodHelp += "\n  " + m->name() + ": " + m->description();
+  }
+  add_option("-m,--method", method_, methodHelp)->capture_default_str()->check(CLI::IsMember(names));
   sppOpt_ = add_option("--spp", spp_, "Samples per pixel for pt, lt (light paths = spp * pixels) and bdpt (default: the scene's sampler sample_count, else 16)")
                 ->check(CLI::PositiveNumber);
   add_option("--samples-per-unit", samplesPerUnit_,
@@ -75,12 +80,36 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
   widthOpt_->needs(height);
   height->needs(widthOpt_);
   add_option("-D,--define", defines_, "Scene parameter name=value (Mitsuba's -D), repeatable");
+  // Every registered method's own parameters (RenderMethod::params), as --<name>. A name shared by two
+  // methods is one option (registerMethod checks that its type is the same).
+  for (const RenderMethod* m : allMethods()) {
+    for (const ParamSpec& spec : m->params()) {
+      auto it = params_.find(spec.name);
+      if (it == params_.end()) {
+        Param& p = params_[spec.name];
+        p.option = add_option("--" + spec.name, p.value,
+                              fmt::format("{}: {} (default {})", m->name(), spec.help, spec.defaultValue));
+        it = params_.find(spec.name);
+      } else {
+        it->second.option->description(it->second.option->get_description() + "; " + m->name() + ": " + spec.help);
+      }
+      it->second.methods.push_back(m->name());
+    }
+  }
 }
 
 CommandLineSettings RenderSettingsOptions::settings() const {
   CommandLineSettings out;
   RenderSettings& s = out.settings;
-  s.method = parseMethod(method_);
+  s.method = findMethod(method_).name();
+  for (const auto& [name, p] : params_) {
+    if (p.option->count() == 0) continue;
+    if (std::find(p.methods.begin(), p.methods.end(), s.method) == p.methods.end())
+      throw std::invalid_argument(fmt::format("--{} is a parameter of {}, not of --method {}", name,
+                                              fmt::join(p.methods, ", "), s.method));
+    s.params[name] = p.value;
+  }
+  findMethod(s.method).checkParams(s.params);  // names the parameter and the allowed values
   s.seed = seed_;
   s.width = width_;
   s.height = height_;

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 
 namespace mlt::wire {
 struct SubmittedSettings;  // proto/convert.h
@@ -55,6 +55,12 @@ class RenderSettingsOptions : public CLI::Option_group {
   bool separateDirect_ = false;
   uint64_t seed_ = 1;
   std::vector<std::string> defines_;
+  struct Param {  // one method parameter's option (RenderMethod::params)
+    std::string value;
+    CLI::Option* option = nullptr;
+    std::vector<std::string> methods;  // the methods that have it
+  };
+  std::map<std::string, Param> params_;
   CLI::Option *sppOpt_ = nullptr, *widthOpt_ = nullptr, *maxDepthOpt_ = nullptr, *rrDepthOpt_ = nullptr;
 };
 

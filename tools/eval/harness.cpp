@@ -48,7 +48,7 @@ MethodSpec parseMethodSpec(const std::string& spec) {
     if (!(m.testScale > 0)) throw std::invalid_argument("method spec '" + spec + "': scale must be positive");
     rest = rest.substr(0, star);
   }
-  m.method = parseMethod(rest);
+  m.method = findMethod(rest).name();
   if (m.label.empty()) m.label = rest;
   return m;
 }
@@ -70,7 +70,7 @@ void setWork(RenderSettings& s, double work) {
   else
     s.spp = std::max(1, int(std::lround(work)));
 }
-double minWork(Method m) { return isMarkovChainMethod(m) ? 0.05 : 1.0; }
+double minWork(const std::string& m) { return isMarkovChainMethod(m) ? 0.05 : 1.0; }
 
 // time(work) = fixed + perWork * work. `fixed` comes from the smallest calibration job; perWork is the
 // least-squares slope through (work, time - fixed) over the larger calibration job and every run since,
@@ -78,7 +78,7 @@ double minWork(Method m) { return isMarkovChainMethod(m) ? 0.05 : 1.0; }
 struct TimeModel {
   double fixed = 0, perWork = 0;
   double sumWT = 0, sumWW = 0;
-  double workFor(double budget, Method m) const {
+  double workFor(double budget, const std::string& m) const {
     double w = perWork > 0 ? (budget - fixed) / perWork : minWork(m);
     w = std::max(w, minWork(m));
     return isMarkovChainMethod(m) ? w : std::round(w);
@@ -320,7 +320,7 @@ EvalResult runEval(const EvalConfig& cfg) {
     } else {
       std::string hash;
       if (cfg.cacheReferences && !desc.sourceFile.empty()) hash = sceneContentHash(desc);
-      logLine(cfg, fmt::format("{}: reference ({} spp={} in {} parts)", es.name, methodName(cfg.reference.method),
+      logLine(cfg, fmt::format("{}: reference ({} spp={} in {} parts)", es.name, cfg.reference.method,
                                cfg.reference.spp, cfg.reference.parts));
       ref = obtainReference(*scene, base, cfg.reference, es.name, hash, (fs::path(cfg.outDir) / "refs").string(),
                             cfg.eps, cfg.threads);

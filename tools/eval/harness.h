@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/scene/scene_desc.h"
 #include "tools/eval/reference.h"
 #include "tools/eval/run_record.h"
@@ -28,7 +28,7 @@ namespace mlt::eval {
 // every developed image of the method: a test hook for a deliberately biased method.
 struct MethodSpec {
   std::string label;
-  Method method = Method::PT;
+  std::string method = "pt";
   double testScale = 1.0;
 };
 MethodSpec parseMethodSpec(const std::string& spec);  // throws std::invalid_argument naming the spec

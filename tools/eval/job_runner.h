@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "common/scene/scene_desc.h"
 
 namespace mlt::eval {

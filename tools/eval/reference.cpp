@@ -16,13 +16,13 @@ namespace fs = std::filesystem;
 std::string referenceCacheKey(const std::string& sceneHash, const RenderSettings& base,
                               const ReferenceSettings& s) {
   std::string text = fmt::format("{}|{}|spp={}|parts={}|seed={}|{}x{}|depth={}|rr={}", sceneHash,
-                                 methodName(s.method), s.spp, s.parts, s.seed, base.width, base.height,
+                                 s.method, s.spp, s.parts, s.seed, base.width, base.height,
                                  base.integrator.maxDepth, base.integrator.rrDepth);
   return fmt::format("{:016x}", fnv1a64(text));
 }
 
 static std::string describe(const ReferenceSettings& s, const std::string& key) {
-  return fmt::format("{} spp={} parts={} (cache key {})", methodName(s.method), s.spp, s.parts, key);
+  return fmt::format("{} spp={} parts={} (cache key {})", s.method, s.spp, s.parts, key);
 }
 
 Reference loadUserReference(const std::string& path, const std::string& sceneName, int width, int height) {

@@ -9,14 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/methods/registry.h"
 #include "tools/eval/metrics.h"
 #include "tools/eval/run_record.h"
 
 namespace mlt::eval {
 
 struct ReferenceSettings {
-  Method method = Method::BDPT;
+  std::string method = "bdpt";
   int spp = 1024;      // total over all parts
   int parts = 4;       // K >= 2
   uint64_t seed = 0x7ef5eed;

@@ -9,6 +9,7 @@
 
 #include "common/job/mlt_job.h"
 #include "common/methods/veach/veach_chain.h"
+#include "common/methods/veach/veach_method.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/develop.h"
 #include "common/mlt/kelemen_source.h"
@@ -24,11 +25,12 @@ constexpr int kStartTries = 16;            // a start strategy whose path evalua
 }  // namespace
 
 JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings) {
-  if (settings.separateDirect) throw std::invalid_argument("veach-mlt: separateDirect is not supported yet");
+  static const VeachMltMethod method;
+  settings.method = method.name();
+  method.validate(settings);
   PathSpace check(scene, settings.integrator.maxDepth);  // throws for unsupported lights
   (void)check;
-  settings.method = Method::PSSMLT_BDPT;  // its bootstrap and chain allocation (see veach_job.h)
-  return planMarkovChainJob(scene, settings);
+  return planMarkovChainJob(method, scene, settings);  // pssmlt-bdpt's bootstrap and allocation (veach_job.h)
 }
 
 PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,

@@ -1,7 +1,8 @@
 // veach-mlt as a Markov chain job: the plan, one chain, the image. Same shapes as the other Markov chain
 // methods (common/job/mlt_job.h), so partial films, merge and develop are the shared ones.
 //
-// Plan: the pssmlt-bdpt bootstrap and chain allocation, unchanged. Its candidates are bdpt samples u
+// Plan: the pssmlt-bdpt bootstrap and chain allocation, unchanged (VeachMltMethod is its ChainJobSpec, with
+// pssmlt-bdpt's target), the settings' method set to "veach-mlt". Its candidates are bdpt samples u
 // with c(u) = lum(sum of MIS-weighted strategies); b = E[c(u)] = integral of lum f(x) over path space,
 // which is exactly the normalization of a path-space chain with target c(x) = lum f(x) (veach_chain.h).
 // Chains start from the plan's resampled candidates (alias table, stratified), one strategy of the
@@ -17,7 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
+#include "common/settings/render_settings.h"
 #include "common/methods/veach/mutations.h"
 
 namespace mlt {

@@ -5,13 +5,14 @@
 #include <string>
 
 #include "common/io/exr_io.h"
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
 
 namespace mlt {
 
 // software, method, scene, sceneHash, seed (a string: 64-bit seeds do not fit a double), width, height,
 // maxDepth, rrDepth, workUnits (merged), workUnitsPlanned, nonFiniteSamples; Markov chains: the chain
-// report (b, b_k, acceptance, ...; common/mlt/chain_report.h); pt/lt/bdpt: samples and spp.
+// report (b, b_k, acceptance, ...; chain_report.h); pt/lt/bdpt: samples and spp: the method's
+// RenderMethod::addMetadata.
 ImageMetadata imageMetadata(const JobPlan& plan, const PartialResult& merged, const std::string& scene,
                             const std::string& sceneHash);
 

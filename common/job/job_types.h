@@ -1,6 +1,7 @@
-// A render job as the farm sees it, independent of the method: settings -> plan (bootstrap, work units)
-// -> partial results of work units -> one developed image. The local CLI, the coordinator and the worker
-// all call exactly these functions, so an image rendered through the farm is the one rendered locally.
+// The types of a render job as the farm sees it, independent of the method: settings -> plan (bootstrap,
+// work units) -> partial results of work units -> one developed image. The functions that make and use
+// them are the method's (common/methods/method.h); the job API over the registry is
+// common/methods/registry.h:
 //
 //   JobPlan plan = planJob(scene, settings);            // coordinator: bootstrap for MLT methods
 //   PartialResult r = runWorkUnit(scene, plan, unit);   // worker: a chain, or a batch of pixel samples
@@ -14,44 +15,9 @@
 #include "common/film/film.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/target_sums.h"
+#include "common/settings/render_settings.h"
 
 namespace mlt {
-
-class RenderScene;
-
-enum class Method { PT, LT, BDPT, PSSMLT, PSSMLT_BDPT, MMLT };
-const char* methodName(Method m);                 // "pt", "lt", "bdpt", "pssmlt", "pssmlt-bdpt", "mmlt"
-Method parseMethod(const std::string& name);      // throws std::invalid_argument naming the value
-bool isMarkovChainMethod(Method m);
-// The names of a Markov chain method's mutation kinds, index = Proposal::kind (pssmlt, pssmlt-bdpt,
-// mmlt: "large", "small"); empty for the others. Statistics and metadata keys use these names.
-const std::vector<std::string>& mutationKindNames(Method m);
-
-enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s1, s2) or Gaussian (sigma)
-enum class MltSplatting { ExpectedValue, KelemenMIS };
-
-struct RenderSettings {
-  Method method = Method::BDPT;
-  uint64_t seed = 1;
-  int width = 0, height = 0;                      // 0 = the scene's film size
-  IntegratorSettings integrator;                  // maxDepth counts path segments
-  // Sample-based methods (pt, lt, bdpt).
-  int spp = 16;                                   // samples per pixel (lt: light paths = spp * pixels)
-  int samplesPerUnit = 0;                         // spp per work unit; 0 = choose automatically
-  // Markov chain methods.
-  double mutationsPerPixel = 16;
-  int chains = 0;                                 // 0 = choose automatically
-  // Bootstrap candidates per path length; 0 = automatic (a few percent of the mutations, see mlt_job.h).
-  // The bootstrap only finds start states and allocates chains to lengths: b is refined by the chains'
-  // large steps (mlt/develop.h (D3)).
-  int bootstrapSamples = 0;
-  float largeStepProb = 0.3f;
-  MutationKernel kernel = MutationKernel::Kelemen;
-  float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
-  MltSplatting splatting = MltSplatting::ExpectedValue;
-  bool separateDirect = false;                    // render direct light by bdpt; chains do indirect only
-  double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
-};
 
 // One independent piece of work: a Markov chain or a batch of pixel samples. Small and serializable.
 struct WorkUnit {
@@ -86,7 +52,7 @@ struct JobPlan {
 
 struct ChainStats {              // sums, so they merge by addition
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;  // index = path length (pssmlt: index 0)
-  std::vector<uint64_t> proposedPerKind, acceptedPerKind;  // index = mutation kind (mutationKindNames)
+  std::vector<uint64_t> proposedPerKind, acceptedPerKind;  // index = mutation kind (the method's mutationKinds())
   std::vector<TargetSums> largeStepSums;     // c of every large step, per path length slot (quantized per unit)
   void add(const ChainStats& o);
 };
@@ -100,10 +66,5 @@ struct PartialResult {
   // Element-wise sum. Callers add in unit-index order for bit-identical results.
   void add(const PartialResult& o);
 };
-
-JobPlan planJob(const RenderScene& scene, const RenderSettings& settings);
-PartialResult runWorkUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
-// Linear RGB, row-major from the top-left. All normalization happens here.
-std::vector<Color> developImage(const JobPlan& plan, const PartialResult& merged);
 
 }  // namespace mlt

@@ -1,4 +1,4 @@
-#include "common/mlt/chain_report.h"
+#include "common/methods/chain_report.h"
 
 #include <fmt/format.h>
 
@@ -6,7 +6,8 @@
 #include <cmath>
 
 #include "common/job/mlt_job.h"
-#include "common/mlt/method_target.h"
+#include "common/methods/pss_method.h"
+#include "common/methods/registry.h"
 
 namespace mlt {
 
@@ -53,7 +54,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   const RenderSettings& s = plan.settings;
   const Normalization& norm = plan.norm;
   ChainReport r;
-  r.method = methodName(s.method);
+  r.method = s.method;
   r.settings = s;
   // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)).
   const RefinedB refined = refinedB(norm, merged.stats);
@@ -89,10 +90,11 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
     ++chainsPerSlot[slot];
     ++r.chains;
   }
-  if (s.method == Method::MMLT) {
+  const PrimarySampleChainMethod* method = findPrimarySampleChainMethod(s.method);
+  if (method && method->chainsPerLength()) {
     const auto& proposed = merged.stats.proposedPerLength;
     const auto& accepted = merged.stats.acceptedPerLength;
-    for (int k = mmltMinLength(s.separateDirect); k < int(norm.bk.size()); ++k) {
+    for (int k = chainMinLength(s.separateDirect); k < int(norm.bk.size()); ++k) {
       ChainLengthReport l;
       l.k = k;
       l.bk = size_t(k) < refined.perSlot.size() ? refined.perSlot[size_t(k)].b : 0.0;

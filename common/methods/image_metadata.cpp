@@ -1,15 +1,14 @@
-#include "common/job/image_metadata.h"
+#include "common/methods/image_metadata.h"
 
-#include "common/mlt/chain_report.h"
+#include "common/methods/registry.h"
 
 namespace mlt {
 
 ImageMetadata imageMetadata(const JobPlan& plan, const PartialResult& merged, const std::string& scene,
                             const std::string& sceneHash) {
   ImageMetadata m;
-  const double pixels = double(plan.settings.width) * double(plan.settings.height);
   m.strings["software"] = "mltfarm";
-  m.strings["method"] = methodName(plan.settings.method);
+  m.strings["method"] = plan.settings.method;
   m.strings["scene"] = scene;
   m.strings["sceneHash"] = sceneHash;
   m.strings["seed"] = std::to_string(plan.settings.seed);
@@ -20,12 +19,7 @@ ImageMetadata imageMetadata(const JobPlan& plan, const PartialResult& merged, co
   m.numbers["workUnits"] = double(merged.units.size());
   m.numbers["workUnitsPlanned"] = double(plan.units.size());
   m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());
-  if (isMarkovChainMethod(plan.settings.method)) {
-    addChainMetadata(makeChainReport(plan, merged), m);  // includes the chain settings (largeStepProb, ...)
-  } else {
-    m.numbers["samples"] = double(merged.samples);
-    m.numbers["spp"] = double(merged.samples) / pixels;
-  }
+  findMethod(plan.settings.method).addMetadata(plan, merged, m);
   return m;
 }
 

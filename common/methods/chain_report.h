@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "common/io/exr_io.h"
-#include "common/job/render_job.h"
+#include "common/job/job_types.h"
 
 namespace mlt {
 
@@ -35,7 +35,7 @@ struct ChainLengthReport {
 };
 
 struct MutationKindReport {
-  std::string name;  // the method's name for it (render_job.h mutationKindNames)
+  std::string name;  // the method's name for it (RenderMethod::mutationKinds)
   uint64_t proposed = 0;
   double acceptance = 0;
 };

@@ -1,0 +1,55 @@
+// Merging partial results (element-wise sums, checked).
+#include "common/job/job_types.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+
+namespace mlt {
+
+namespace {
+void addVectors(std::vector<uint64_t>& a, const std::vector<uint64_t>& b) {
+  if (a.size() < b.size()) a.resize(b.size(), 0);
+  for (size_t i = 0; i < b.size(); ++i) a[i] += b[i];
+}
+}  // namespace
+
+void ChainStats::add(const ChainStats& o) {
+  addVectors(proposedPerLength, o.proposedPerLength);
+  addVectors(acceptedPerLength, o.acceptedPerLength);
+  addVectors(proposedPerKind, o.proposedPerKind);
+  addVectors(acceptedPerKind, o.acceptedPerKind);
+  addPerSlot(largeStepSums, o.largeStepSums);
+}
+
+void PartialResult::add(const PartialResult& o) {
+  // Check everything before changing anything, so a rejected result leaves this one intact.
+  std::vector<uint32_t> theirs = o.units;
+  std::sort(theirs.begin(), theirs.end());
+  if (std::adjacent_find(theirs.begin(), theirs.end()) != theirs.end())
+    throw std::invalid_argument("PartialResult::add: work unit " +
+                                std::to_string(*std::adjacent_find(theirs.begin(), theirs.end())) +
+                                " appears twice in the added result");
+  std::vector<uint32_t> common;
+  std::set_intersection(units.begin(), units.end(), theirs.begin(), theirs.end(), std::back_inserter(common));
+  if (!common.empty())
+    throw std::invalid_argument("PartialResult::add: work unit " + std::to_string(common.front()) +
+                                " is already included");
+  const bool emptyFilm = film.width() == 0 && film.height() == 0;
+  if (!emptyFilm && o.film.pixelCount() > 0 &&
+      (film.width() != o.film.width() || film.height() != o.film.height()))
+    throw std::invalid_argument("PartialResult::add: film size mismatch");
+
+  if (emptyFilm) film = o.film;
+  else if (o.film.pixelCount() > 0) film.merge(o.film);
+  samples += o.samples;
+  stats.add(o.stats);
+  std::vector<uint32_t> merged;
+  merged.reserve(units.size() + theirs.size());
+  std::merge(units.begin(), units.end(), theirs.begin(), theirs.end(), std::back_inserter(merged));
+  units = std::move(merged);
+  seconds += o.seconds;
+}
+
+}  // namespace mlt

@@ -1,0 +1,87 @@
+#include "common/methods/pss_method.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/integrators/path_evaluator.h"
+#include "common/methods/chain_report.h"
+#include "common/methods/registry.h"
+
+namespace mlt {
+
+std::unique_ptr<ChainState> PrimarySampleChainMethod::makeState(KelemenSource& source, const RenderSettings&) const {
+  return std::make_unique<PssState>(source);
+}
+
+void PrimarySampleChainMethod::validate(const RenderSettings& s) const {
+  RenderMethod::validate(s);
+  if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
+    throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
+  if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
+  if (s.bootstrapSamples != 0 && s.bootstrapSamples < 2)
+    throw std::invalid_argument("settings: bootstrap samples must be >= 2 (or 0: automatic), got " +
+                                std::to_string(s.bootstrapSamples));
+  if (s.separateDirect && !allowsSeparateDirect())
+    throw std::invalid_argument("settings: " + name() +
+                                " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
+  if (s.separateDirect && s.spp < 1)
+    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1, got " + std::to_string(s.spp));
+  KelemenSource kernel(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
+  chainPathLengths(*this, s);                        // chains per length: a valid max depth
+}
+
+JobPlan PrimarySampleChainMethod::plan(const RenderScene& scene, const RenderSettings& settings) const {
+  return planMarkovChainJob(*this, scene, settings);
+}
+
+PartialResult PrimarySampleChainMethod::runUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) const {
+  return runMarkovChain(*this, scene, plan, unit);
+}
+
+std::vector<Color> PrimarySampleChainMethod::develop(const JobPlan& plan, const PartialResult& merged) const {
+  return developMarkovChainImage(plan, merged);
+}
+
+void PrimarySampleChainMethod::addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& m) const {
+  addChainMetadata(makeChainReport(plan, merged), m);  // includes the chain settings (largeStepProb, ...)
+}
+
+const PrimarySampleChainMethod* findPrimarySampleChainMethod(const std::string& name) {
+  return dynamic_cast<const PrimarySampleChainMethod*>(&findMethod(name));
+}
+
+namespace {
+const PrimarySampleChainMethod& spec(const RenderSettings& s) {
+  const PrimarySampleChainMethod* m = findPrimarySampleChainMethod(s.method);
+  if (!m) throw std::invalid_argument("settings: method " + s.method + " is not a Markov chain method over primary samples");
+  return *m;
+}
+}  // namespace
+
+uint64_t bootstrapPerLength(const RenderSettings& s) { return bootstrapPerLength(spec(s), s); }
+std::vector<int> chainPathLengths(const RenderSettings& s) { return chainPathLengths(spec(s), s); }
+void validateMarkovChainSettings(const RenderSettings& s) { validateMarkovChainSettings(spec(s), s); }
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& s) {
+  return bootstrapMarkovChainJob(spec(s), scene, s);
+}
+JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& s, const MarkovChainBootstrap& boot) {
+  return planMarkovChainJob(spec(s), scene, s, boot);
+}
+
+EvaluatorPssTarget::EvaluatorPssTarget(std::unique_ptr<PathEvaluator> evaluator, bool separateDirect)
+    : evaluator_(std::move(evaluator)), separateDirect_(separateDirect) {}
+EvaluatorPssTarget::~EvaluatorPssTarget() = default;
+
+void EvaluatorPssTarget::evaluate(SampleSource& source, int /*pathLength*/, PathContribution& out) {
+  out.clear();
+  evaluator_->evaluate(source, nullptr, out);
+  if (!separateDirect_) return;
+  // A path of s + t vertices has s + t - 1 segments. Splats without (s, t) cannot be classified.
+  for (const Splat& sp : out.splats)
+    if (sp.s < 0 || sp.t < 0)
+      throw std::logic_error("separateDirect: the path evaluator does not label its splats with (s, t)");
+  std::erase_if(out.splats, [](const Splat& sp) { return sp.s + sp.t - 1 <= kDirectMaxSegments; });
+}
+
+}  // namespace mlt

@@ -1,0 +1,60 @@
+// The settings of a render job, below every layer that uses them (integrators, chains, jobs, methods,
+// the wire). A method is named by a string and looked up in the registry (common/methods/registry.h);
+// nothing below the methods layer knows which methods exist.
+//
+// Settings come in groups, and each method reads only its own (the wire carries them as a oneof,
+// proto/mltfarm.proto):
+//   - common: method, seed, film size, integrator (max depth, Russian roulette, MIS heuristic);
+//   - sample batches (family Samples: pt, lt, bdpt; also the direct pass of a chain method with
+//     separateDirect): spp, samplesPerUnit;
+//   - Markov chains (family MarkovChain): mutations, chains, bootstrap, the Kelemen sample source's kernel,
+//     splatting, separateDirect;
+//   - `params`: a method's own named parameters (e.g. a mutation's probability), declared by the method
+//     (RenderMethod::params) with their defaults, parsed and validated by it. A new method adds
+//     parameters here without touching the wire, the CLI parser or this file.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace mlt {
+
+enum class MisHeuristic { Balance, Power };
+
+struct IntegratorSettings {
+  int maxDepth = 5;           // maximum number of path segments (edges); -1 = unlimited
+  int rrDepth = 5;            // Russian roulette starts after this many segments
+  MisHeuristic heuristic = MisHeuristic::Power;
+};
+
+enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s1, s2) or Gaussian (sigma)
+enum class MltSplatting { ExpectedValue, KelemenMIS };
+
+// A method's own parameters: name -> value as text (the method's ParamSpec says how to read it).
+using MethodParams = std::map<std::string, std::string>;
+
+struct RenderSettings {
+  std::string method = "bdpt";                    // a registered method's name (common/methods/registry.h)
+  uint64_t seed = 1;
+  int width = 0, height = 0;                      // 0 = the scene's film size
+  IntegratorSettings integrator;                  // maxDepth counts path segments
+  // Sample batches (pt, lt, bdpt; the direct pass of separateDirect).
+  int spp = 16;                                   // samples per pixel (lt: light paths = spp * pixels)
+  int samplesPerUnit = 0;                         // spp per work unit; 0 = choose automatically
+  // Markov chain methods.
+  double mutationsPerPixel = 16;
+  int chains = 0;                                 // 0 = choose automatically
+  // Bootstrap candidates per path length; 0 = automatic (a few percent of the mutations, see mlt_job.h).
+  // The bootstrap only finds start states and allocates chains to lengths: b is refined by the chains'
+  // large steps (mlt/develop.h (D3)).
+  int bootstrapSamples = 0;
+  float largeStepProb = 0.3f;
+  MutationKernel kernel = MutationKernel::Kelemen;
+  float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
+  MltSplatting splatting = MltSplatting::ExpectedValue;
+  bool separateDirect = false;                    // render direct light by bdpt; chains do indirect only
+  MethodParams params;                            // the method's own parameters (validated by the method)
+  double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
+};
+
+}  // namespace mlt
