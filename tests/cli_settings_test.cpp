@@ -104,11 +104,13 @@ TEST(CliSettings, RenderAndSubmitDeclareTheSameSettingOptionsOnce) {
         "--large-step", "--kernel", "--s1", "--s2", "--sigma", "--splatting", "--separate-direct", "--max-depth",
         "--rr-depth", "--seed", "--width", "--height", "-D,--define"})
     EXPECT_TRUE(names.count(expected)) << expected << " is not a shared setting option";
-  // ... and one per parameter a registered method declares (RenderMethod::params, e.g. rjmlt's --technique-step).
+  // ... and one option per registered method parameter (--<name>, e.g. veach-mlt's --veach-lens).
   std::set<std::string> params;
   for (const RenderMethod* m : allMethods())
-    for (const ParamSpec& p : m->params()) params.insert("--" + p.name);
-  for (const std::string& p : params) EXPECT_TRUE(names.count(p)) << p << " is not a setting option";
+    for (const ParamSpec& p : m->params()) {
+      params.insert(p.name);
+      EXPECT_TRUE(names.count("--" + p.name)) << "--" << p.name << " is not a shared setting option";
+    }
   EXPECT_EQ(names.size(), 19u + params.size());
   // Nothing declared twice: no option of the command itself has a name of a setting option.
   for (const Command* c : {&render, &submit})

@@ -51,10 +51,14 @@ const PrimarySampleChainMethod* findPrimarySampleChainMethod(const std::string& 
   return dynamic_cast<const PrimarySampleChainMethod*>(&findMethod(name));
 }
 
+const ChainJobSpec* findChainJobSpec(const std::string& name) {
+  return dynamic_cast<const ChainJobSpec*>(&findMethod(name));
+}
+
 namespace {
-const PrimarySampleChainMethod& spec(const RenderSettings& s) {
-  const PrimarySampleChainMethod* m = findPrimarySampleChainMethod(s.method);
-  if (!m) throw std::invalid_argument("settings: method " + s.method + " is not a Markov chain method over primary samples");
+const ChainJobSpec& spec(const RenderSettings& s) {
+  const ChainJobSpec* m = findChainJobSpec(s.method);
+  if (!m) throw std::invalid_argument("settings: method " + s.method + " is not a Markov chain method with a bootstrap");
   return *m;
 }
 }  // namespace

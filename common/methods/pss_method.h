@@ -33,6 +33,10 @@ class PrimarySampleChainMethod : public RenderMethod, public ChainJobSpec {
 // A method of this family by name (the local renderer plans a time budget from one bootstrap through it);
 // nullptr if `name` is registered but of another kind. Throws std::invalid_argument for an unknown name.
 const PrimarySampleChainMethod* findPrimarySampleChainMethod(const std::string& name);
+// A method whose jobs the shared bootstrap and chain allocation plan (the methods of this family, and
+// veach-mlt, whose path-space chains start from pssmlt-bdpt's bootstrap); nullptr otherwise. Throws
+// std::invalid_argument for an unknown name. The convenience functions below accept all of them.
+const ChainJobSpec* findChainJobSpec(const std::string& name);
 
 // The target of pssmlt and pssmlt-bdpt: a path evaluator on the chain's numbers (the film position from
 // the camera stream). separateDirect: paths of at most kDirectMaxSegments segments are dropped (rendered

@@ -15,6 +15,7 @@
 #include "common/methods/pssmlt_bdpt/pssmlt_bdpt_method.h"
 #include "common/methods/pt/pt_method.h"
 #include "common/methods/rjmlt/rjmlt_method.h"
+#include "common/methods/veach/veach_method.h"
 #include "common/render/render_scene.h"
 
 namespace mlt {
@@ -34,6 +35,7 @@ struct Registry {
     methods.push_back(std::make_unique<PssmltBdptMethod>());
     methods.push_back(std::make_unique<MmltMethod>());
     methods.push_back(std::make_unique<RjmltMethod>());
+    methods.push_back(std::make_unique<VeachMltMethod>());
   }
 };
 

@@ -83,7 +83,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   // 1. The bootstrap gets kBootstrapShare of the budget (mlt_job.h): a probe of the smallest automatic size
   //    measures the candidates' throughput, and the count that fits is resolved into the settings (and
   //    recorded in the image, so that --bootstrap with it reproduces the image without a budget).
-  const PrimarySampleChainMethod* method = findPrimarySampleChainMethod(s.method);
+  const ChainJobSpec* method = findChainJobSpec(s.method);
   if (!method) throw std::invalid_argument("--time: method " + s.method + " has no time-budgeted planning yet");
   MarkovChainBootstrap boot;
   if (s.bootstrapSamples == 0) {

@@ -1,0 +1,135 @@
+// Veach's multi-chain perturbation (Veach 1997, sec. 11.4.3.3): the lens perturbation continued through
+// paths E S+ D S+ D ... whose first diffuse vertex cannot be connected (its light-side neighbour is
+// specular). The film position moves as in the lens perturbation and the first chain is retraced with the
+// same lobes to the diffuse vertex d_1. At each diffuse vertex d_i whose light-side neighbour is specular,
+// the direction toward the next chain is x's direction at d_i turned by an angle theta (exponential in
+// [theta1, theta2], as the caustic perturbation) about a uniform axis, and the next chain is retraced with
+// x's lobes to d_{i+1}. The last diffuse vertex d_n is connected to the kept x_{d_n - 1} (non-specular), or
+// the last chain ends on the light (S* L: it must hit an emitter).
+//
+// All chains are traced from the eye side, so the density is in the canonical measure directly:
+//     T(x -> y) = p_film(|d|) W H pdfDir(y) |cos y_{k-1}| / |y_k - y_{k-1}|^2
+//                 * prod over i < n of  p_w(theta_i) |cos y_{d_i - 1}| / |y_{d_i} - y_{d_i - 1}|^2,
+// p_w(theta) = p_theta(theta) / (2 pi sin theta), theta_i the angle between x's and y's directions at
+// d_i (symmetric, as the film step).
+#include <algorithm>
+#include <cmath>
+
+#include "common/methods/veach/mutations.h"
+#include "common/render/render_scene.h"
+
+namespace mlt::veach {
+
+namespace {
+
+// The diffuse vertices d_1 > d_2 > ... > d_n of x's eye side, E S+ D (S+ D)* followed by a connectible
+// vertex or the light; empty if x does not have that form with n >= 2.
+std::vector<int> chainEnds(const Path& x) {
+  std::vector<int> d;
+  const int k = x.k();
+  int i = k - 1;
+  if (i < 1 || !x.v[i].specular) return {};  // the first chain has a specular vertex
+  for (;;) {
+    while (i >= 1 && x.v[i].specular) --i;
+    if (i < 0) return {};
+    d.push_back(i);
+    if (i == 0) break;                  // the last chain ends on the light
+    if (!x.v[i - 1].specular) break;    // a connectible pair: done
+    --i;
+  }
+  if (d.size() < 2) return {};
+  return d;
+}
+
+class MultiChainPerturbation final : public Mutation {
+ public:
+  MultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1, double theta2)
+      : space_(space), r1_(r1), r2_(r2), theta1_(theta1), theta2_(theta2) {}
+
+  bool applicable(const Path& x) const override { return !chainEnds(x).empty(); }
+
+  bool propose(const Path& x, Pcg32& rng, Path& y) const override {
+    const std::vector<int> d = chainEnds(x);
+    const int k = x.k();
+    Vec2 r0;
+    if (!space_.raster(x, &r0)) return false;
+    const double R = r2_ * std::exp(-std::log(r2_ / r1_) * rng.uniformDouble());
+    const double phi = 2 * M_PI * rng.uniformDouble();
+    const Vec2 raster(float(r0.x + R * std::cos(phi)), float(r0.y + R * std::sin(phi)));
+    const Camera& cam = space_.scene().camera();
+    if (!(raster.x >= 0 && raster.x < float(cam.width()) && raster.y >= 0 && raster.y < float(cam.height()))) return false;
+    y = x;
+    Vec3 dir;
+    y.v[k] = space_.cameraVertex(raster, x.uLens, &dir);
+    int i = k - 1;
+    for (size_t c = 0; c < d.size(); ++c) {
+      if (c > 0) {
+        // Turn x's direction at d_{c} by theta about a uniform axis.
+        const int dv = d[c - 1];
+        const Vec3 wx = normalize(x.v[dv - 1].p - x.v[dv].p);
+        const double theta = theta2_ * std::exp(-std::log(theta2_ / theta1_) * rng.uniformDouble());
+        const double ph = 2 * M_PI * rng.uniformDouble(), st = std::sin(theta);
+        dir = normalize(Frame(wx).toWorld(Vec3(float(st * std::cos(ph)), float(st * std::sin(ph)), float(std::cos(theta)))));
+        i = dv - 1;
+      }
+      for (; i >= d[c]; --i) {
+        const PathVertex& prev = y.v[i + 1];
+        std::optional<PathVertex> hit = space_.trace(prev.p, prev.kind == VertexKind::Camera ? Vec3() : prev.ng, dir);
+        if (!hit) return false;
+        if (i > d[c]) {
+          const std::optional<Vec3> next = followLobe(*hit, prev, transmits(x, i), TransportMode::Radiance);
+          if (!next) return false;
+          hit->specular = true;
+          dir = *next;
+        } else if (i == 0) {
+          if (!space_.makeLightVertex(*hit)) return false;
+        } else {
+          if (hit->bsdf->isDelta()) return false;
+          hit->specular = false;
+        }
+        y.v[i] = *hit;
+      }
+    }
+    return true;
+  }
+
+  double density(const Path& x, const Path& y) const override {
+    const std::vector<int> d = chainEnds(x);
+    const int k = x.k();
+    if (d.empty() || y.k() != k || chainEnds(y) != d || !x.v[k].samePoint(y.v[k])) return 0;
+    for (int i = 0; i < d.back(); ++i)
+      if (!x.v[i].samePoint(y.v[i])) return 0;
+    for (int i = d.back() + 1; i < k; ++i) {
+      const bool diffuse = std::find(d.begin(), d.end(), i) != d.end();
+      if (!diffuse && transmits(x, i) != transmits(y, i)) return 0;
+    }
+    Vec2 rx, ry;
+    if (!space_.raster(x, &rx) || !space_.raster(y, &ry)) return 0;
+    const double dx = double(ry.x) - rx.x, dy = double(ry.y) - rx.y, dist = std::sqrt(dx * dx + dy * dy);
+    const Camera& cam = space_.scene().camera();
+    double T = exponentialStepDensity(dist, r1_, r2_) / (2 * M_PI * dist) * double(cam.width()) * double(cam.height()) *
+               space_.eyeStep(y, k - 1);
+    for (size_t c = 0; c + 1 < d.size() && T > 0; ++c) {
+      const int dv = d[c];
+      const Vec3 wx = normalize(x.v[dv - 1].p - x.v[dv].p), wy = normalize(y.v[dv - 1].p - y.v[dv].p);
+      const double theta = std::atan2(double(length(cross(wx, wy))), double(dot(wx, wy)));
+      const double pW = exponentialStepDensity(theta, theta1_, theta2_) / (2 * M_PI * std::sin(theta));
+      const float d2 = distanceSquared(y.v[dv].p, y.v[dv - 1].p);
+      T *= pW * PathSpace::cosAt(y.v[dv - 1], wy) / d2;
+    }
+    return T;
+  }
+
+ private:
+  const PathSpace& space_;
+  double r1_, r2_, theta1_, theta2_;
+};
+
+}  // namespace
+
+std::unique_ptr<Mutation> makeMultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1,
+                                                     double theta2) {
+  return std::make_unique<MultiChainPerturbation>(space, r1, r2, theta1, theta2);
+}
+
+}  // namespace mlt::veach

@@ -1,0 +1,76 @@
+// Veach's mutations (Veach 1997, sec. 11.4; Veach and Guibas 1997, sec. 5), each with its exact
+// transition density T(x -> y) in the canonical measure of path.h, so that the chain's acceptance
+//     a(x -> y) = min(1, f(y) T(y -> x) / (f(x) T(x -> y)))                        (Veach eq. 11.3)
+// is computed, never assumed symmetric. Paths are x = (x_0 light, ..., x_k lens).
+//
+//  bidir         delete x_{l+1} .. x_{m-1} (kd = m - l edges, l in [-1, k-1], m in [1, k+1]); kd by pd1,
+//                l uniform; add ka edges (pa1 around kd) as l' vertices from the light side and m' from the
+//                eye side, then connect (sec. 11.4.2). T sums over every (l, m, l') that yields y.
+//  lens          perturb the film position by an exponential step in [r1, r2] pixels, retrace the eye chain
+//                E S* D with the same lobes, connect to the kept x_{m-1} (ES*D(D|L), sec. 11.4.3.1).
+//  caustic       perturb the direction leaving x_j by an exponential angle in [theta1, theta2], retrace
+//                S* toward the eye, connect to the kept lens point ((D|L) S* D E, sec. 11.4.3.2).
+//  multichain    lens perturbation continued through E S+ D (S+ D)* (D|L): at each diffuse vertex whose
+//                light-side neighbour is specular, x's outgoing direction turned by an exponential angle
+//                in [theta1, theta2], the next chain retraced with x's lobes (sec. 11.4.3.3).
+//  lens-subpath  replace the eye subpath E S* D by a fresh one through a uniform film position (sec. 11.4.4).
+//
+// Specular chains traced from the eye are in the canonical measure of path.h; those traced from the light
+// (bidir's light side, the caustic perturbation) are converted (path.h lightChainToCanonical).
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/core/rng.h"
+#include "common/methods/veach/path.h"
+
+namespace mlt::veach {
+
+// Mutation kinds: index = Proposal::kind; names as reported in statistics and metadata.
+enum MutationKind : int { kBidir = 0, kLens = 1, kCaustic = 2, kMultiChain = 3, kLensSubpath = 4, kNumKinds = 5 };
+const std::vector<std::string>& mutationKindNames();
+
+struct MutationSettings {
+  // Selection weights; a move inapplicable to the current path is skipped (its weight removed), and the
+  // probability of the chosen move enters T (veach_chain.h).
+  double weight[kNumKinds] = {1.0, 1.0, 1.0, 1.0, 1.0};
+  double r1 = 0.1;          // lens perturbation: step in pixels, exponential in [r1, r2]
+  double r2 = 0;            // 0: 5% of sqrt(film pixels)
+  double theta1 = 1e-4;     // caustic perturbation: angle in radians, exponential in [theta1, theta2]
+  double theta2 = 0.1;
+};
+
+class Mutation {
+ public:
+  virtual ~Mutation() = default;
+  virtual bool applicable(const Path& x) const = 0;
+  // Proposes y from x; false when the move cannot produce a path (the chain then rejects).
+  virtual bool propose(const Path& x, Pcg32& rng, Path& y) const = 0;
+  // T(x -> y) given that this move was chosen; 0 when it cannot produce y from x.
+  virtual double density(const Path& x, const Path& y) const = 0;
+};
+
+std::unique_ptr<Mutation> makeBidirMutation(const PathSpace& space);
+std::unique_ptr<Mutation> makeLensPerturbation(const PathSpace& space, double r1, double r2);
+std::unique_ptr<Mutation> makeCausticPerturbation(const PathSpace& space, double theta1, double theta2);
+std::unique_ptr<Mutation> makeLensSubpathMutation(const PathSpace& space);
+std::unique_ptr<Mutation> makeMultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1,
+                                                     double theta2);
+
+// ---- shared helpers -----------------------------------------------------------------------------------
+// The eye chain E S* D: the index m of the first non-specular vertex seen from the lens (x_{k-1}, x_{k-2},
+// ...), or -1 if it is the light (E S* L) or the path is too short.
+int eyeChainEnd(const Path& x);
+// Samples a direction from vertex `from` reached from `prev` (BSDF sampling in `mode`); nullopt if absorbed.
+std::optional<BsdfSample> sampleDirection(const PathVertex& from, const PathVertex& prev, TransportMode mode,
+                                          Pcg32& rng, Vec3* wiWorld);
+// Follows the lobe of type `transmit` at specular vertex `s` reached from `prev`: the outgoing world
+// direction, or nullopt if the BSDF has no such lobe there (total internal reflection, a type change).
+std::optional<Vec3> followLobe(const PathVertex& s, const PathVertex& prev, bool transmit, TransportMode mode);
+// Whether x's specular vertex i reflects or transmits.
+bool transmits(const Path& x, int i);
+// Exponential step density of Veach's perturbations: s = s2 exp(-ln(s2/s1) u), density 1 / (s ln(s2/s1)).
+double exponentialStepDensity(double s, double s1, double s2);
+
+}  // namespace mlt::veach

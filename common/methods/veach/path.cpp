@@ -1,0 +1,239 @@
+// Veach's path space: f(x) and local densities in the canonical measure (see path.h).
+#include "common/methods/veach/path.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "common/render/render_scene.h"
+
+namespace mlt::veach {
+
+namespace {
+
+Vec3 unitToward(const Vec3& from, const Vec3& to, float* d2) {
+  const Vec3 w = to - from;
+  *d2 = lengthSquared(w);
+  return *d2 > 0 ? w / std::sqrt(*d2) : Vec3();
+}
+
+}  // namespace
+
+std::optional<SpecularLobe> specularLobe(const Bsdf& bsdf, const Vec3& woL, const Vec3& wiL, const BsdfQuery& q) {
+  // Every Dirac BSDF here picks its lobe by comparing uComponent with cumulative lobe probabilities, so
+  // these values reach each lobe of non-negligible probability.
+  static constexpr float kU[] = {0.0f, kOneMinusEpsilon, 0.5f, 0.25f, 0.75f, 0.05f, 0.95f};
+  for (float u : kU) {
+    const std::optional<BsdfSample> bs = bsdf.sample(woL, u, Vec2(0.5f, 0.5f), q);
+    if (!bs || !bs->delta || !(bs->pdfW > 0)) continue;
+    if (dot(bs->wi, wiL) > 0.999f) return SpecularLobe{bs->f, bs->pdfW, woL.z * bs->wi.z < 0};
+  }
+  return std::nullopt;
+}
+
+float PathSpace::cosAt(const PathVertex& v, const Vec3& w) {
+  if (v.kind == VertexKind::Camera) return absDot(v.ns, w);
+  if (v.ng.x == 0 && v.ng.y == 0 && v.ng.z == 0) return 1.0f;
+  return absDot(v.ng, w);
+}
+
+float geometry(const PathVertex& a, const PathVertex& b) {
+  float d2;
+  const Vec3 w = unitToward(a.p, b.p, &d2);
+  if (!(d2 > 0)) return 0;
+  return PathSpace::cosAt(a, w) * PathSpace::cosAt(b, w) / d2;
+}
+
+double lightChainToCanonical(const Path& x, int r0, int r1) {
+  const auto& v = x.v;
+  const double gv = geometry(v[r0 - 1], v[r0]);
+  if (!(gv > 0)) return 0;
+  double factor = geometry(v[r1 + 1], v[r1]) / gv;
+  for (int i = r0; i <= r1; ++i) {
+    const PathVertex& s = v[i];
+    float d2;
+    const Vec3 we = unitToward(s.p, v[i + 1].p, &d2), wl = unitToward(s.p, v[i - 1].p, &d2);
+    const double den = double(absDot(s.ng, we)) * absDot(s.ns, wl);
+    if (!(den > 0)) return 0;
+    factor *= double(absDot(s.ns, we)) * absDot(s.ng, wl) / den;
+  }
+  return factor;
+}
+
+PathSpace::PathSpace(const RenderScene& scene, int maxDepth)
+    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth) {
+  for (const auto& l : scene.lights())
+    if (l->infinite() || l->deltaPosition() || l->deltaDirection())
+      throw std::invalid_argument("veach-mlt: only area lights are supported (the scene has a point, spot, "
+                                  "directional or environment light)");
+}
+
+Color PathSpace::f(const Path& x, Vec2* pRaster) const {
+  const int k = x.k();
+  if (k < 1 || k > maxEdges_) return {};
+  const auto& v = x.v;
+  if (v[0].kind != VertexKind::Light || !v[0].light || v[k].kind != VertexKind::Camera) return {};
+  for (int i = 1; i < k; ++i)
+    if (v[i].kind != VertexKind::Surface || !v[i].bsdf) return {};
+  float d2;
+  // Le(x_0 -> x_1)
+  Color F = v[0].light->L(v[0].p, v[0].ng, v[0].uv, unitToward(v[0].p, v[1].p, &d2));
+  if (F.isBlack()) return {};
+  // rho(x_i): radiance-form BSDF factors (path.h).
+  for (int i = 1; i < k; ++i) {
+    const PathVertex& s = v[i];
+    const Vec3 wo = unitToward(s.p, v[i + 1].p, &d2), wi = unitToward(s.p, v[i - 1].p, &d2);
+    const Frame frame(s.ns);
+    const BsdfQuery q{s.uv, TransportMode::Radiance};
+    if (s.specular) {
+      const std::optional<SpecularLobe> lobe = specularLobe(*s.bsdf, frame.toLocal(wo), frame.toLocal(wi), q);
+      if (!lobe) return {};
+      F *= lobe->f * absDot(s.ns, wi);
+    } else {
+      const float cosG = absDot(s.ng, wi);
+      if (!(cosG > 0)) return {};
+      F *= s.bsdf->eval(frame.toLocal(wo), frame.toLocal(wi), q) * (absDot(s.ns, wi) / cosG);
+    }
+    if (F.isBlack()) return {};
+  }
+  // Edges: G, except from a specular vertex toward its light-side neighbour (canonical measure).
+  for (int i = 0; i < k; ++i) {
+    const PathVertex& a = v[i];
+    const PathVertex& b = v[i + 1];
+    if (!(b.kind == VertexKind::Surface && b.specular)) F *= geometry(a, b);
+    if (F.isBlack()) return {};
+    const Vec3 na = a.kind == VertexKind::Camera ? Vec3() : a.ng, nb = b.kind == VertexKind::Camera ? Vec3() : b.ng;
+    if (!scene_.visible(a.p, na, b.p, nb)) return {};
+  }
+  Ray r;
+  r.o = v[k].p;
+  r.d = unitToward(v[k].p, v[k - 1].p, &d2);
+  Vec2 raster;
+  const Color We = scene_.camera().We(r, &raster);
+  if (We.isBlack()) return {};
+  F *= We;
+  if (!F.isFinite()) return {};
+  if (pRaster) *pRaster = raster;
+  return F;
+}
+
+bool PathSpace::raster(const Path& x, Vec2* pRaster) const {
+  const int k = x.k();
+  if (k < 1) return false;
+  float d2;
+  Ray r;
+  r.o = x.v[k].p;
+  r.d = unitToward(x.v[k].p, x.v[k - 1].p, &d2);
+  return !scene_.camera().We(r, pRaster).isBlack();
+}
+
+double PathSpace::eyeStep(const Path& x, int i) const {
+  const PathVertex& from = x.v[i + 1];
+  const PathVertex& to = x.v[i];
+  float d2;
+  const Vec3 w = unitToward(from.p, to.p, &d2);
+  if (!(d2 > 0)) return 0;
+  if (from.kind == VertexKind::Camera) {
+    Ray r;
+    r.o = from.p;
+    r.d = w;
+    float pdfPos = 0, pdfDir = 0;
+    scene_.camera().pdfWe(r, &pdfPos, &pdfDir);
+    return double(pdfDir) * cosAt(to, w) / d2;
+  }
+  if (from.kind != VertexKind::Surface || i + 2 >= int(x.v.size())) return 0;
+  const Vec3 wo = unitToward(from.p, x.v[i + 2].p, &d2);
+  const Frame frame(from.ns);
+  const BsdfQuery q{from.uv, TransportMode::Radiance};
+  if (from.specular) {
+    const std::optional<SpecularLobe> lobe = specularLobe(*from.bsdf, frame.toLocal(wo), frame.toLocal(w), q);
+    return lobe ? double(lobe->pdf) : 0.0;
+  }
+  float d2to;
+  unitToward(from.p, to.p, &d2to);
+  return double(from.bsdf->pdf(frame.toLocal(wo), frame.toLocal(w), q)) * cosAt(to, w) / d2to;
+}
+
+double PathSpace::lensDensity() const {
+  const Camera& cam = scene_.camera();
+  const CameraRay cr = cam.generateRay(Vec2(0.5f * float(cam.width()), 0.5f * float(cam.height())), Vec2(0.5f, 0.5f));
+  float pdfPos = 0, pdfDir = 0;
+  cam.pdfWe(cr.ray, &pdfPos, &pdfDir);
+  return pdfPos;
+}
+
+double PathSpace::lightStep(const Path& x, int i) const {
+  const auto& v = x.v;
+  if (i == 0) {
+    if (v[0].kind != VertexKind::Light || !v[0].light || v.size() < 2) return 0;
+    float d2, pdfPos = 0, pdfDir = 0;
+    v[0].light->pdfLe(v[0].p, v[0].ng, unitToward(v[0].p, v[1].p, &d2), &pdfPos, &pdfDir);
+    return double(scene_.lightSampler().pmf(v[0].lightIndex)) * pdfPos;
+  }
+  float d2;
+  const Vec3 w = unitToward(v[i - 1].p, v[i].p, &d2);
+  if (!(d2 > 0)) return 0;
+  if (i == 1) {
+    float pdfPos = 0, pdfDir = 0;
+    v[0].light->pdfLe(v[0].p, v[0].ng, w, &pdfPos, &pdfDir);
+    return double(pdfDir) * cosAt(v[1], w) / d2;
+  }
+  const PathVertex& from = v[i - 1];
+  if (from.kind != VertexKind::Surface) return 0;
+  float d2p;
+  const Vec3 wo = unitToward(from.p, v[i - 2].p, &d2p);
+  const Frame frame(from.ns);
+  const BsdfQuery q{from.uv, TransportMode::Importance};
+  if (from.specular) {
+    const std::optional<SpecularLobe> lobe = specularLobe(*from.bsdf, frame.toLocal(wo), frame.toLocal(w), q);
+    return lobe ? double(lobe->pdf) : 0.0;
+  }
+  return double(from.bsdf->pdf(frame.toLocal(wo), frame.toLocal(w), q)) * cosAt(v[i], w) / d2;
+}
+
+std::optional<PathVertex> PathSpace::trace(const Vec3& from, const Vec3& fromNg, const Vec3& dir) const {
+  // The ray starts exactly at `from` and skips its own surface by tMin, so the hit lies on the line
+  // from + t dir: the perturbations measure their steps back from vertex positions, and an origin offset
+  // along the normal (1e-4 scene units) would move the line by more than caustic steps of 1e-4 rad.
+  Ray r;
+  r.o = from;
+  r.d = dir;
+  if (fromNg.x != 0 || fromNg.y != 0 || fromNg.z != 0) {
+    const float scale = std::fmax(1.0f, std::fmax(std::fabs(from.x), std::fmax(std::fabs(from.y), std::fabs(from.z))));
+    r.tMin = 1e-4f * scale / std::fmax(absDot(fromNg, dir), 0.05f);
+  }
+  const std::optional<SurfaceHit> hit = scene_.intersect(r);
+  if (!hit) return std::nullopt;
+  PathVertex v;
+  v.kind = VertexKind::Surface;
+  v.p = hit->p;
+  v.ng = hit->ng;
+  v.ns = hit->ns;
+  v.uv = hit->uv;
+  v.bsdf = &scene_.bsdf(hit->bsdf);
+  if (hit->light >= 0) {
+    v.lightIndex = hit->light;
+    v.light = &scene_.light(hit->light);
+  }
+  return v;
+}
+
+bool PathSpace::makeLightVertex(PathVertex& v) const {
+  if (!v.light) return false;
+  v.kind = VertexKind::Light;
+  v.specular = false;
+  v.ns = v.ng;
+  return true;
+}
+
+PathVertex PathSpace::cameraVertex(Vec2 pRaster, Vec2 uLens, Vec3* dir) const {
+  const CameraRay cr = scene_.camera().generateRay(pRaster, uLens);
+  PathVertex c;
+  c.kind = VertexKind::Camera;
+  c.p = cr.ray.o;
+  c.ng = c.ns = cr.n;
+  *dir = cr.ray.d;
+  return c;
+}
+
+}  // namespace mlt::veach

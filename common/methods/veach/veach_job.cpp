@@ -1,0 +1,104 @@
+// veach-mlt job functions (see veach_job.h).
+#include "common/methods/veach/veach_job.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "common/job/mlt_job.h"
+#include "common/methods/veach/veach_chain.h"
+#include "common/methods/veach/veach_method.h"
+#include "common/mlt/chain.h"
+#include "common/mlt/develop.h"
+#include "common/mlt/kelemen_source.h"
+#include "common/mlt/pss_chain.h"
+#include "common/mlt/target.h"
+#include "common/render/render_scene.h"
+
+namespace mlt::veach {
+
+namespace {
+constexpr double kReplayTolerance = 1e-5;  // as mlt_job.cpp: the same code on the same numbers
+constexpr int kStartTries = 16;            // a start strategy whose path evaluates to f = 0 is redrawn
+}  // namespace
+
+JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings) {
+  static const VeachMltMethod method;
+  settings.method = method.name();
+  method.validate(settings);
+  PathSpace check(scene, settings.integrator.maxDepth);  // throws for unsupported lights
+  (void)check;
+  return planMarkovChainJob(method, scene, settings);  // pssmlt-bdpt's bootstrap and allocation (veach_job.h)
+}
+
+PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,
+                            const MutationSettings& mutations) {
+  const auto start = std::chrono::steady_clock::now();
+  const RenderSettings& s = plan.settings;
+  if (unit.mutations == 0) throw std::invalid_argument("veach-mlt: work unit " + std::to_string(unit.index) + " has no mutations");
+  const PathSpace space(scene, s.integrator.maxDepth);
+
+  // Start: replay the candidate, then pick one of its strategies.
+  Pcg32 pick = chainRng(s.seed, unit.index, 3);
+  std::optional<StartPath> sp;
+  for (int tries = 0; tries < kStartTries && !sp; ++tries) {
+    IndependentSource source = IndependentSource::candidate(s.seed, unit.startCandidate);
+    sp = startPathFromSample(space, s.integrator, source, pick.uniformDouble());
+    if (!sp) continue;
+    if (!(std::fabs(sp->candidateC - unit.startContribution) <= kReplayTolerance * std::fabs(unit.startContribution)))
+      throw std::runtime_error(fmt::format(
+          "veach-mlt chain replay mismatch: job seed {}, chain {}, candidate {}: bootstrap recorded c = {:.17g}, "
+          "replay gives {:.17g}", s.seed, unit.index, unit.startCandidate, unit.startContribution, sp->candidateC));
+  }
+  if (!sp)
+    throw std::runtime_error(fmt::format("veach-mlt: chain {} (candidate {}) has no strategy with f > 0 in {} tries",
+                                         unit.index, unit.startCandidate, kStartTries));
+
+  VeachChainState state(space, mutations, sp->path, chainRng(s.seed, unit.index, 4));
+  VeachChainTarget target(state);
+  PathContribution current, scratch;
+  currentContribution(state, current);
+  const double cx = targetFunction(current);
+
+  PartialResult result;
+  result.film = Film(s.width, s.height);
+  result.units = {unit.index};
+  FilmSink sink(result.film, chainLayer(0));  // b P / M applied at develop (D1)
+  ChainConfig config;                         // expected-value splatting
+  Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
+  const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
+
+  quantizeFilm(result.film, s.seed, unit.index);
+  result.samples = unit.mutations;
+  ChainStats& st = result.stats;
+  st.proposedPerKind.assign(counts.proposed, counts.proposed + kNumKinds);
+  st.acceptedPerKind.assign(counts.accepted, counts.accepted + kNumKinds);
+  st.proposedPerLength.assign(1, 0);
+  st.acceptedPerLength.assign(1, 0);
+  for (int k = 0; k < kNumKinds; ++k) {
+    st.proposedPerLength[0] += counts.proposed[k];
+    st.acceptedPerLength[0] += counts.accepted[k];
+  }
+  st.largeStepSums.assign(1, TargetSums{});
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged) {
+  return developMarkovChainImage(plan, merged);
+}
+
+std::string acceptanceSummary(const ChainStats& stats) {
+  std::string out;
+  const auto& names = mutationKindNames();
+  for (size_t k = 0; k < names.size() && k < stats.proposedPerKind.size(); ++k) {
+    const uint64_t p = stats.proposedPerKind[k], a = k < stats.acceptedPerKind.size() ? stats.acceptedPerKind[k] : 0;
+    if (!out.empty()) out += ", ";
+    out += fmt::format("{} {:.3f} ({}/{})", names[k], p ? double(a) / double(p) : 0.0, a, p);
+  }
+  return out;
+}
+
+}  // namespace mlt::veach

@@ -1,0 +1,43 @@
+// The method "veach-mlt": Veach's path-space Metropolis light transport (Veach 1997, ch. 11; Veach and
+// Guibas 1997) with all five mutations (docs/VEACH.md). Registered in registry.cpp. Its plan is the
+// pssmlt-bdpt bootstrap and chain allocation (this class is the ChainJobSpec that plans it: the bdpt
+// target, one path-length slot); its units are path-space chains (veach_job.h), not Kelemen chains.
+//
+// Parameters (RenderSettings::params, CLI --<name>):
+//   veach-bidir, veach-lens, veach-caustic, veach-multichain, veach-lens-subpath   selection weights (>= 0)
+//   veach-lens-r1, veach-lens-r2          lens / multi-chain film step range in pixels (r2 0: 5% of sqrt(P))
+//   veach-caustic-theta1, veach-caustic-theta2   caustic / multi-chain angle range in radians
+#pragma once
+#include "common/job/mlt_job.h"
+#include "common/methods/method.h"
+#include "common/methods/veach/mutations.h"
+
+namespace mlt {
+
+class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
+ public:
+  std::string name() const override { return "veach-mlt"; }
+  std::string description() const override {
+    return "Veach's path-space MLT: bidirectional mutation, lens, caustic and multi-chain perturbations, lens subpath "
+           "mutation";
+  }
+  MethodFamily family() const override { return MethodFamily::MarkovChain; }
+  std::vector<std::string> mutationKinds() const override { return veach::mutationKindNames(); }
+  std::vector<ParamSpec> params() const override;
+  void validate(const RenderSettings& settings) const override;
+  JobPlan plan(const RenderScene& scene, const RenderSettings& settings) const override;
+  PartialResult runUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) const override;
+  std::vector<Color> develop(const JobPlan& plan, const PartialResult& merged) const override;
+  void addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& metadata) const override;
+
+  // ChainJobSpec (the bootstrap and chain allocation of pssmlt-bdpt).
+  bool chainsPerLength() const override { return false; }
+  bool allowsSeparateDirect() const override { return false; }
+  std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
+  std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
+
+  // The mutation settings from the params (defaults where unset).
+  veach::MutationSettings mutationSettings(const RenderSettings& settings) const;
+};
+
+}  // namespace mlt

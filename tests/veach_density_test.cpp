@@ -1,0 +1,354 @@
+// Each mutation's computed transition density T(x -> y) (common/methods/veach/mutations.h) against the
+// move's actual proposals, on the diffuse small Cornell box.
+//
+// For a fixed x, the moved vertex z of y (the inserted vertex for the bidirectional mutation, the new
+// y_{k-1} for the perturbations and the lens subpath mutation) lands in a bin R (a rectangle on a wall)
+// with probability
+//     P(R) = integral over R of T(x -> y(z)) dA(z),
+// counting only proposals with f(y) > 0 (T is the density of proposing y; for paths that carry nothing
+// the chain never needs it, and T's split terms assume the connection is unoccluded). P(R) is estimated
+// independently by uniform points z in R (area * mean of T(x -> y(z)) [f(y(z)) > 0]); the fraction of
+// proposals landing in R must agree within kZ combined standard errors in every bin with enough
+// samples. The bidirectional test also shows it can fail: the density of one (l', m') split alone, half
+// of Veach's sum over the splits, is rejected.
+// Perturbations: the bin holding x's own vertex is not compared. There T ~ 1 / r^2 (a step of length r
+// about it) is integrable, but its estimate from uniform points in the bin is too heavy-tailed for a
+// standard error; the bins around it test the solid-angle or film-to-area conversion of T.
+// Reversibility: for every proposal with f(y) > 0, T(y -> x) > 0 (the same move can undo it).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "common/methods/veach/mutations.h"
+#include "common/methods/veach/path.h"
+#include "common/methods/veach/veach_chain.h"
+#include "common/render/render_scene.h"
+#include "tests/support/test_scenes.h"
+
+namespace mlt {
+namespace {
+
+using veach::Path;
+using veach::PathSpace;
+using veach::PathVertex;
+
+constexpr double kZ = 4.5;  // per bin; ~50 bins per test
+
+// A rectangle origin + a u + b v (a, b in [0, 1)) on a wall, with that wall's vertex data.
+struct Bin {
+  Vec3 origin, u, v;
+  PathVertex proto;
+  double area() const { return length(cross(u, v)); }
+  bool contains(const Vec3& p) const {
+    const Vec3 n = normalize(cross(u, v)), d = p - origin;
+    if (std::fabs(dot(d, n)) > 1e-4f) return false;
+    const float a = dot(d, u) / dot(u, u), b = dot(d, v) / dot(v, v);
+    return a >= 0 && a < 1 && b >= 0 && b < 1;
+  }
+};
+
+// The wall vertex at p, traced from just inside the wall (the light below the ceiling and the block on
+// the floor must not be hit instead).
+PathVertex wallVertex(const PathSpace& space, const Vec3& p, const Vec3& normal) {
+  const Vec3 inward = dot(normal, Vec3(0, 0, 0) - p) > 0 ? normal : -normal;
+  const std::optional<PathVertex> hit = space.trace(p + inward * 0.005f, Vec3(), -inward);
+  EXPECT_TRUE(hit.has_value());
+  return *hit;
+}
+
+// n x n bins on the rectangle (corner, edge u, edge v).
+void addGrid(const PathSpace& space, std::vector<Bin>& bins, Vec3 corner, Vec3 u, Vec3 v, int n) {
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Bin b;
+      b.origin = corner + u * (float(i) / n) + v * (float(j) / n);
+      b.u = u * (1.0f / n);
+      b.v = v * (1.0f / n);
+      b.proto = wallVertex(space, b.origin + b.u * 0.5f + b.v * 0.5f, normalize(cross(u, v)));
+      bins.push_back(b);
+    }
+}
+
+// The five walls of the small Cornell box, n x n bins each.
+std::vector<Bin> wallBins(const PathSpace& space, int n) {
+  std::vector<Bin> bins;
+  addGrid(space, bins, {-1, -1, -1}, {2, 0, 0}, {0, 0, 2}, n);  // floor
+  addGrid(space, bins, {-1, 1, -1}, {2, 0, 0}, {0, 0, 2}, n);   // ceiling
+  addGrid(space, bins, {-1, -1, 1}, {2, 0, 0}, {0, 2, 0}, n);   // back
+  addGrid(space, bins, {-1, -1, -1}, {0, 2, 0}, {0, 0, 2}, n);  // left
+  addGrid(space, bins, {1, -1, -1}, {0, 2, 0}, {0, 0, 2}, n);   // right
+  return bins;
+}
+
+struct Check {
+  double maxZ = 0;
+  int binsTested = 0;
+  uint64_t inBins = 0;
+};
+
+// moved(y): the moved vertex of a proposal of the tested class, or nullopt. place(z): the path y(z).
+Check checkDensity(const PathSpace& space, const veach::Mutation& move, const Path& x, const std::vector<Bin>& bins,
+                   const std::function<std::optional<Vec3>(const Path&)>& moved,
+                   const std::function<Path(const PathVertex&)>& place,
+                   const std::function<double(const Path&, const Path&)>& density, uint64_t N, int M,
+                   uint64_t seed, int* irreversible = nullptr, const Vec3* singular = nullptr) {
+  std::vector<uint64_t> count(bins.size(), 0);
+  Pcg32 rng(seed, 1);
+  Path y;
+  for (uint64_t n = 0; n < N; ++n) {
+    if (!move.propose(x, rng, y)) continue;
+    if (luminance(space.f(y, nullptr)) <= 0) continue;
+    if (irreversible && !veach::samePath(x, y) && !(move.density(y, x) > 0 && move.density(x, y) > 0)) ++*irreversible;
+    const std::optional<Vec3> z = moved(y);
+    if (!z) continue;
+    for (size_t b = 0; b < bins.size(); ++b)
+      if (bins[b].contains(*z)) {
+        ++count[b];
+        break;
+      }
+  }
+  Check c;
+  Pcg32 pts(seed, 2);
+  for (size_t b = 0; b < bins.size(); ++b) {
+    double sum = 0, sq = 0;
+    for (int i = 0; i < M; ++i) {
+      PathVertex z = bins[b].proto;
+      z.p = bins[b].origin + bins[b].u * pts.uniform() + bins[b].v * pts.uniform();
+      const Path yz = place(z);
+      const double T = luminance(space.f(yz, nullptr)) > 0 ? density(x, yz) : 0.0;
+      sum += T;
+      sq += T * T;
+    }
+    const double A = bins[b].area(), mean = sum / M;
+    const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
+    const double got = double(count[b]) / double(N), seGot = std::sqrt(std::max(got, expect) / double(N));
+    c.inBins += count[b];
+    if (std::max(got, expect) * double(N) < 30) continue;
+    if (singular && bins[b].contains(*singular)) continue;
+    ++c.binsTested;
+    const double z = std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect);
+    if (z > c.maxZ) c.maxZ = z;
+    if (z > kZ) std::printf("  bin %zu: proposals %.5g, integral of T %.5g (z = %.2f)\n", b, got, expect, z);
+  }
+  return c;
+}
+
+// A start path of the given length whose vertex `index` satisfies `want`.
+Path findPath(const PathSpace& space, int k, const std::function<bool(const Path&)>& want) {
+  IntegratorSettings integrator;
+  integrator.maxDepth = 5;
+  for (uint64_t i = 0; i < 100000; ++i) {
+    IndependentSource src(99, i);
+    const auto sp = veach::startPathFromSample(space, integrator, src, 0.5);
+    if (sp && sp->path.k() == k && want(sp->path)) return sp->path;
+  }
+  ADD_FAILURE() << "no start path found";
+  return {};
+}
+
+bool onPlane(const Vec3& p, int axis, float value) { return std::fabs(p[axis] - value) < 1e-4f; }
+
+TEST(VeachDensity, BidirectionalMutationInsertingOneVertex) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  const PathSpace space(*scene, 5);
+  const auto move = veach::makeBidirMutation(space);
+  // x = L D D E with x_1 on the back wall and x_2 on the floor.
+  const Path x = findPath(space, 3, [](const Path& p) { return onPlane(p.v[1].p, 2, 1) && onPlane(p.v[2].p, 1, -1); });
+  // Class: (l, m) = (1, 2), ka = 2: one vertex z between x_1 and x_2 (two splits can make it).
+  const auto moved = [&](const Path& y) -> std::optional<Vec3> {
+    if (y.k() != 4 || !y.v[0].samePoint(x.v[0]) || !y.v[1].samePoint(x.v[1]) || !y.v[3].samePoint(x.v[2]) ||
+        !y.v[4].samePoint(x.v[3]))
+      return std::nullopt;
+    return y.v[2].p;
+  };
+  const auto place = [&](const PathVertex& z) {
+    Path y = x;
+    y.v.insert(y.v.begin() + 2, z);
+    return y;
+  };
+  const auto T = [&](const Path& a, const Path& b) { return move->density(a, b); };
+  const std::vector<Bin> bins = wallBins(space, 3);
+  int irreversible = 0;
+  const Check c = checkDensity(space, *move, x, bins, moved, place, T, 1500000, 4000, 5, &irreversible);
+  std::printf("bidir: %llu proposals in bins, %d bins tested, max z %.2f, irreversible %d\n",
+              (unsigned long long)c.inBins, c.binsTested, c.maxZ, irreversible);
+  EXPECT_GE(c.binsTested, 20);
+  EXPECT_LT(c.maxZ, kZ);
+  EXPECT_EQ(irreversible, 0);
+  // Half of Veach's sum (as if only one split could make y) is detected.
+  const auto half = [&](const Path& a, const Path& b) { return 0.5 * move->density(a, b); };
+  const Check wrong = checkDensity(space, *move, x, bins, moved, place, half, 1500000, 400, 5);
+  EXPECT_GT(wrong.maxZ, kZ);
+}
+
+TEST(VeachDensity, LensSubpathMutation) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  const PathSpace space(*scene, 5);
+  const auto move = veach::makeLensSubpathMutation(space);
+  const Path x = findPath(space, 3, [](const Path&) { return true; });
+  const auto moved = [&](const Path& y) -> std::optional<Vec3> {
+    if (y.k() != x.k()) return std::nullopt;
+    return y.v[x.k() - 1].p;
+  };
+  const auto place = [&](const PathVertex& z) {
+    Path y = x;
+    y.v[x.k() - 1] = z;
+    return y;
+  };
+  const auto T = [&](const Path& a, const Path& b) { return move->density(a, b); };
+  int irreversible = 0;
+  const Check c = checkDensity(space, *move, x, wallBins(space, 3), moved, place, T, 300000, 400, 6, &irreversible);
+  std::printf("lens subpath: %llu in bins, %d bins tested, max z %.2f\n", (unsigned long long)c.inBins, c.binsTested,
+              c.maxZ);
+  EXPECT_GE(c.binsTested, 20);
+  EXPECT_LT(c.maxZ, kZ);
+  EXPECT_EQ(irreversible, 0);
+}
+
+// Bins on a square of side 2 * half centred on p (n odd: p inside the middle bin) on the plane axis = p[axis].
+std::vector<Bin> binsAround(const PathSpace& space, const Vec3& p, int axis, float half, int n) {
+  Vec3 u, v;
+  u[(axis + 1) % 3] = 2 * half;
+  v[(axis + 2) % 3] = 2 * half;
+  std::vector<Bin> bins;
+  addGrid(space, bins, p - u * 0.5f - v * 0.5f, u, v, n);
+  return bins;
+}
+
+TEST(VeachDensity, LensPerturbation) {
+  const auto scene = RenderScene::build(test::smallCornellBox(32, 32));
+  const PathSpace space(*scene, 5);
+  const auto move = veach::makeLensPerturbation(space, 0.1, 3.0);
+  // x_{k-1} on the back wall, away from its edges.
+  const Path x = findPath(space, 3, [](const Path& p) {
+    const Vec3 q = p.v[2].p;
+    return onPlane(q, 2, 1) && std::fabs(q.x) < 0.4f && std::fabs(q.y) < 0.4f;
+  });
+  const int k = x.k();
+  const auto moved = [&](const Path& y) -> std::optional<Vec3> { return y.v[k - 1].p; };
+  const auto place = [&](const PathVertex& z) {
+    Path y = x;
+    y.v[k - 1] = z;
+    return y;
+  };
+  const auto T = [&](const Path& a, const Path& b) { return move->density(a, b); };
+  int irreversible = 0;
+  const Check c = checkDensity(space, *move, x, binsAround(space, x.v[k - 1].p, 2, 0.45f, 7), moved, place, T,
+                               300000, 600, 7, &irreversible, &x.v[k - 1].p);
+  std::printf("lens perturbation: %llu in bins, %d bins tested, max z %.2f\n", (unsigned long long)c.inBins,
+              c.binsTested, c.maxZ);
+  EXPECT_GE(c.binsTested, 20);
+  EXPECT_LT(c.maxZ, kZ);
+  EXPECT_EQ(irreversible, 0);
+}
+
+TEST(VeachDensity, CausticPerturbation) {
+  const auto scene = RenderScene::build(test::smallCornellBox(32, 32));
+  const PathSpace space(*scene, 5);
+  const auto move = veach::makeCausticPerturbation(space, 1e-4, 0.1);
+  // x = L D E with x_1 on the floor: the direction leaving the light is perturbed.
+  const Path x = findPath(space, 2, [](const Path& p) {
+    const Vec3 q = p.v[1].p;
+    return onPlane(q, 1, -1) && q.x < 0 && std::fabs(q.z) < 0.5f;
+  });
+  const auto moved = [&](const Path& y) -> std::optional<Vec3> { return y.v[1].p; };
+  const auto place = [&](const PathVertex& z) {
+    Path y = x;
+    y.v[1] = z;
+    return y;
+  };
+  const auto T = [&](const Path& a, const Path& b) { return move->density(a, b); };
+  int irreversible = 0;
+  const Check c = checkDensity(space, *move, x, binsAround(space, x.v[1].p, 1, 0.3f, 7), moved, place, T, 300000,
+                               600, 8, &irreversible, &x.v[1].p);
+  std::printf("caustic perturbation: %llu in bins, %d bins tested, max z %.2f\n", (unsigned long long)c.inBins,
+              c.binsTested, c.maxZ);
+  EXPECT_GE(c.binsTested, 20);
+  EXPECT_LT(c.maxZ, kZ);
+  EXPECT_EQ(irreversible, 0);
+}
+
+}  // namespace
+}  // namespace mlt
+
+namespace mlt {
+namespace {
+
+// Every proposal with f(y) > 0 has T(x -> y) > 0 and can be undone by the same move (T(y -> x) > 0, the
+// move applicable at y; for the bidirectional mutation unless it deleted a specular vertex of x), for all five moves from many start paths of a scene with glass, mirror
+// and a mirror wall (specular chains on both sides, multi-chain paths E S D S L).
+TEST(VeachDensity, EveryProposalIsReversible) {
+  SceneDesc desc = test::cornellBoxSpecular(16, 16);
+  BsdfDesc mirror;
+  mirror.type = BsdfDesc::Type::Conductor;
+  mirror.mirror = true;
+  desc.bsdfs.push_back(mirror);
+  for (MeshDesc& m : desc.meshes)
+    if (m.name == "back") m.bsdf = int(desc.bsdfs.size()) - 1;
+  const auto scene = RenderScene::build(desc);
+  const PathSpace space(*scene, 6);
+  std::unique_ptr<veach::Mutation> moves[veach::kNumKinds] = {
+      veach::makeBidirMutation(space), veach::makeLensPerturbation(space, 0.1, 2.0),
+      veach::makeCausticPerturbation(space, 1e-4, 0.1), veach::makeMultiChainPerturbation(space, 0.1, 2.0, 1e-4, 0.1),
+      veach::makeLensSubpathMutation(space)};
+  IntegratorSettings integrator;
+  integrator.maxDepth = 6;
+  int proposed[veach::kNumKinds] = {}, irreversible[veach::kNumKinds] = {};
+  Pcg32 rng(17, 3);
+  Path y;
+  for (uint64_t i = 0; i < 3000; ++i) {
+    IndependentSource src(123, i);
+    const auto sp = veach::startPathFromSample(space, integrator, src, 0.5);
+    if (!sp) continue;
+    for (int kind = 0; kind < veach::kNumKinds; ++kind) {
+      if (!moves[kind]->applicable(sp->path)) continue;
+      for (int rep = 0; rep < 4; ++rep) {
+        if (!moves[kind]->propose(sp->path, rng, y) || veach::samePath(sp->path, y)) continue;
+        if (luminance(space.f(y, nullptr)) <= 0) continue;
+        ++proposed[kind];
+        const Path& x = sp->path;
+        // The bidirectional mutation may delete a specular vertex of x, or re-aim a kept one (x_m traced
+        // from again): its reverse would have to make x's specular scattering with both ends of the
+        // changed part fixed, which has probability zero, so T(y -> x) = 0 there (the chain rejects such
+        // y). Every other proposal must be reversible.
+        bool deletedSpecular = false;
+        if (kind == veach::kBidir) {
+          int pre = 0, suf = 0;
+          while (pre <= std::min(x.k(), y.k()) && x.v[pre].samePoint(y.v[pre])) ++pre;
+          while (suf <= std::min(x.k(), y.k()) && x.v[x.k() - suf].samePoint(y.v[y.k() - suf])) ++suf;
+          for (int j = std::max(0, pre - 1); j <= std::min(x.k(), x.k() - suf + 1); ++j) deletedSpecular |= x.v[j].specular;
+        }
+        const bool forward = moves[kind]->density(x, y) > 0;
+        const bool backward = moves[kind]->density(y, x) > 0 && moves[kind]->applicable(y);
+        if (!forward || (!backward && !deletedSpecular)) {
+          ++irreversible[kind];
+          if (getenv("VEACH_DEBUG")) {
+            auto show = [](const Path& p) {
+              std::string o;
+              for (const auto& v : p.v)
+                o += v.kind == veach::VertexKind::Light ? "L" : v.kind == veach::VertexKind::Camera ? "E" : (v.specular ? "S" : "D");
+              return o;
+            };
+            std::printf("kind %d: x %s y %s fwd %d bwd %d\n", kind, show(x).c_str(), show(y).c_str(), int(forward), int(backward));
+          }
+        }
+      }
+    }
+  }
+  for (int kind = 0; kind < veach::kNumKinds; ++kind) {
+    std::printf("%s: %d proposals with f > 0, %d irreversible\n", veach::mutationKindNames()[kind].c_str(),
+                proposed[kind], irreversible[kind]);
+    EXPECT_GT(proposed[kind], 10) << veach::mutationKindNames()[kind];
+    EXPECT_EQ(irreversible[kind], 0) << veach::mutationKindNames()[kind];
+  }
+}
+
+}  // namespace
+}  // namespace mlt

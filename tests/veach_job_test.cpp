@@ -1,0 +1,131 @@
+// veach-mlt's job functions (common/methods/veach/veach_job.h): a chain is a pure function of (job seed,
+// chain index) -- run twice, it gives the same bytes; it replays its start candidate and refuses a plan
+// whose recorded c it does not reproduce; its statistics count every mutation once, per kind; the plan
+// is the pssmlt-bdpt bootstrap; unsupported settings and scenes are refused with a message.
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cstring>
+#include <stdexcept>
+
+#include "common/methods/image_metadata.h"
+#include "common/methods/registry.h"
+#include "common/methods/veach/veach_job.h"
+#include "common/render/render_scene.h"
+#include "tests/support/test_scenes.h"
+
+namespace mlt {
+namespace {
+
+RenderSettings smallSettings() {
+  RenderSettings s;
+  s.seed = 21;
+  s.width = s.height = 16;
+  s.integrator.maxDepth = 5;
+  s.mutationsPerPixel = 8;
+  s.chains = 4;
+  return s;
+}
+
+bool sameFilm(Film& a, Film& b) {
+  for (size_t layer = 0; layer < std::max(a.splatLayerCount(), b.splatLayerCount()); ++layer) {
+    if (a.hasSplatLayer(layer) != b.hasSplatLayer(layer)) return false;
+    if (!a.hasSplatLayer(layer)) continue;
+    const auto& x = a.splatLayer(layer);
+    const auto& y = b.splatLayer(layer);
+    if (x.size() != y.size() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) != 0) return false;
+  }
+  return true;
+}
+
+TEST(VeachJob, ChainsArePureFunctionsOfSeedAndIndex) {
+  const auto scene = RenderScene::build(test::cornellBoxSpecular(16, 16));
+  const JobPlan plan = veach::planVeachJob(*scene, smallSettings());
+  ASSERT_EQ(plan.units.size(), 4u);
+  const veach::MutationSettings mut;
+  for (const WorkUnit& u : plan.units) {
+    PartialResult a = veach::runVeachChain(*scene, plan, u, mut);
+    PartialResult b = veach::runVeachChain(*scene, plan, u, mut);
+    EXPECT_TRUE(sameFilm(a.film, b.film)) << "chain " << u.index;
+    EXPECT_EQ(a.stats.acceptedPerKind, b.stats.acceptedPerKind);
+    // Every mutation counted once, per kind and in the path-length slot develop reads.
+    uint64_t sum = 0;
+    for (uint64_t p : a.stats.proposedPerKind) sum += p;
+    EXPECT_EQ(sum, u.mutations);
+    ASSERT_EQ(a.stats.proposedPerLength.size(), 1u);
+    EXPECT_EQ(a.stats.proposedPerLength[0], u.mutations);
+    EXPECT_EQ(a.samples, u.mutations);
+  }
+  // Different chains differ.
+  PartialResult c0 = veach::runVeachChain(*scene, plan, plan.units[0], mut);
+  PartialResult c1 = veach::runVeachChain(*scene, plan, plan.units[1], mut);
+  EXPECT_FALSE(sameFilm(c0.film, c1.film));
+}
+
+TEST(VeachJob, ReplayMismatchIsRefused) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  const JobPlan plan = veach::planVeachJob(*scene, smallSettings());
+  WorkUnit u = plan.units[0];
+  u.startContribution *= 1.01;
+  EXPECT_THROW(veach::runVeachChain(*scene, plan, u, veach::MutationSettings{}), std::runtime_error);
+}
+
+TEST(VeachJob, PlanIsThePssmltBdptBootstrap) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  RenderSettings s = smallSettings();
+  const JobPlan veachPlan = veach::planVeachJob(*scene, s);
+  s.method = "pssmlt-bdpt";
+  const JobPlan pss = planJob(*scene, s);
+  EXPECT_EQ(veachPlan.norm.b, pss.norm.b);
+  ASSERT_EQ(veachPlan.units.size(), pss.units.size());
+  for (size_t i = 0; i < pss.units.size(); ++i) EXPECT_EQ(veachPlan.units[i].startCandidate, pss.units[i].startCandidate);
+}
+
+// Through the registry and the job API, as the CLI and the farm run it: the image is the job functions'
+// image, and the metadata carries the acceptance of each of the five mutations.
+TEST(VeachJob, RegisteredAsVeachMlt) {
+  ASSERT_TRUE(hasMethod("veach-mlt"));
+  EXPECT_EQ(findMethod("veach-mlt").mutationKinds(), veach::mutationKindNames());
+  EXPECT_TRUE(isMarkovChainMethod("veach-mlt"));
+  const auto scene = RenderScene::build(test::cornellBoxSpecular(16, 16));
+  RenderSettings s = smallSettings();
+  s.method = "veach-mlt";
+  const JobPlan plan = planJob(*scene, s);
+  PartialResult merged, direct;
+  for (const WorkUnit& u : plan.units) {
+    merged.add(runWorkUnit(*scene, plan, u));
+    direct.add(veach::runVeachChain(*scene, plan, u, veach::MutationSettings{}));
+  }
+  const std::vector<Color> a = developImage(plan, merged), b = veach::developVeachImage(plan, direct);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
+  const ImageMetadata m = imageMetadata(plan, merged, "test scene", "0");
+  for (const std::string& kind : veach::mutationKindNames()) {
+    std::string key = "acceptance" + kind;
+    key[10] = char(std::toupper(key[10]));
+    EXPECT_TRUE(m.numbers.count(key)) << key;
+  }
+  EXPECT_GT(m.numbers.at("acceptanceBidir"), 0.1);
+  // A parameter of the method changes the chains: only the bidirectional mutation.
+  s.params["veach-lens"] = "0";
+  s.params["veach-caustic"] = "0";
+  s.params["veach-multichain"] = "0";
+  s.params["veach-lens-subpath"] = "0";
+  const JobPlan onlyBidir = planJob(*scene, s);
+  const PartialResult r = runWorkUnit(*scene, onlyBidir, onlyBidir.units[0]);
+  EXPECT_EQ(r.stats.proposedPerKind[veach::kBidir], onlyBidir.units[0].mutations);
+  s.params["veach-bidir"] = "0";
+  EXPECT_THROW(planJob(*scene, s), std::invalid_argument);  // not ergodic
+}
+
+TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
+  const auto box = RenderScene::build(test::smallCornellBox(16, 16));
+  RenderSettings s = smallSettings();
+  s.separateDirect = true;
+  EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
+  const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));
+  EXPECT_THROW(veach::planVeachJob(*pointLights, smallSettings()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace mlt
