@@ -4,7 +4,9 @@
 //   by heartbeats and requeued when they time out -> each task accepted once, keyed by (job, task),
 //   persisted before it is acknowledged -> Merging (tasks summed in index order) -> Done (EXR + PNG).
 // Restarted on the same state directory it reloads every job, its plan and its accepted tasks, and
-// continues where it stopped.
+// continues where it stopped. One file per role: client_handler.cpp, worker_handler.cpp, upload.cpp,
+// planner.cpp, merge_job.cpp, preview.cpp, reaper.cpp, recovery.cpp; coordinator.cpp holds the shared
+// state helpers.
 #pragma once
 #include <atomic>
 #include <chrono>
@@ -87,6 +89,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     Clock::time_point lastSeen;
   };
 
+  void recover();                          // reload the state directory (recovery.cpp)
   Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
   void touch(Job& job);                    // bump version, notify watchers; caller holds mu_
   void refreshProgress(Job& job);

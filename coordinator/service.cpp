@@ -9,7 +9,7 @@
 #include <fstream>
 #include <map>
 
-#include "coordinator/convert.h"
+#include "proto/farm_convert.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 namespace mlt::farm {

@@ -4,7 +4,7 @@
 #include <fmt/format.h>
 #include <map>
 
-#include "coordinator/bundle.h"
+#include "common/farm/bundle.h"
 #include "proto/convert.h"
 
 namespace mlt::farm {
