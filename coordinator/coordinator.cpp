@@ -10,6 +10,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fmt/format.h>
+#include <optional>
 #include <random>
 
 namespace fs = std::filesystem;
@@ -43,15 +44,11 @@ int64_t parseJobId(const std::string& jobId) {
   throw FarmError(Code::NotFound, fmt::format("job_id: unknown job '{}'", jobId));
 }
 
-uint64_t Coordinator::unitWork(const JobPlan& plan, const WorkUnit& u) {
-  if (isMarkovChainMethod(plan.settings.method)) return u.mutations;
-  return uint64_t(u.sampleEnd - u.sampleBegin) * uint64_t(plan.settings.width) * uint64_t(plan.settings.height);
-}
-
 Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) {
   fs::create_directories(fs::path(opt_.stateDir) / "scenes");
   fs::create_directories(fs::path(opt_.stateDir) / "jobs");
   store_ = std::make_unique<JobStore>((fs::path(opt_.stateDir) / "farm.db").string());
+  results_ = std::make_unique<ResultStore>((fs::path(opt_.stateDir) / "jobs").string());
   std::random_device rd;
   instance_ = fmt::format("{:08x}", uint32_t(rd()));
 
@@ -97,7 +94,11 @@ void Coordinator::touch(Job& job) {
 void Coordinator::setState(Job& job, JobState s, const std::string& error) {
   job.status.state = s;
   if (!error.empty()) job.status.error = error;
-  if (isTerminal(s)) job.pending.clear();  // stop leasing; leases in flight are cancelled by heartbeats
+  if (isTerminal(s)) {
+    job.pending.clear();  // stop leasing; leases in flight are cancelled by heartbeats
+    job.merged = {};      // the running sum is done with (the image is written, or there will be none)
+    job.waiting.clear();
+  }
   store_->updateState(job.rec.id, int(s), job.status.error);
   refreshProgress(job);
   touch(job);
@@ -105,12 +106,29 @@ void Coordinator::setState(Job& job, JobState s, const std::string& error) {
                error.empty() ? "" : fmt::format(" error=\"{}\"", error));
 }
 
-void Coordinator::startRunning(Job& job) {
+void Coordinator::startRunning(Job& job, bool loadResults) {
   job.tasks = splitTasks(*job.plan);
   job.taskState.assign(job.tasks.size(), TaskState::Pending);
   job.attempts.assign(job.tasks.size(), 0);
-  for (uint32_t t : store_->acceptedTasks(job.rec.id))
-    if (t < job.taskState.size()) job.taskState[t] = TaskState::Accepted;
+  job.merged = emptyPartial(*job.plan);
+  job.mergedTasks = 0;
+  job.waiting.clear();
+  for (uint32_t t : results_->stored(job.rec.id)) {
+    if (t >= job.taskState.size()) continue;
+    if (!loadResults) {  // a finished job: its image is written, only the count is shown
+      job.taskState[t] = TaskState::Accepted;
+      continue;
+    }
+    std::string why;
+    std::optional<PartialResult> r = results_->load(job.rec.id, t, &why);
+    if (!r) {
+      spdlog::warn("job={} task={} event=stored_result_dropped reason=\"{}\"", job.status.jobId, t, why);
+      continue;  // rendered again
+    }
+    job.taskState[t] = TaskState::Accepted;
+    foldAccepted(job, t, std::move(*r));
+  }
+  if (!loadResults) job.merged = {};
   job.pending.clear();
   for (uint32_t t = 0; t < job.tasks.size(); ++t)
     if (job.taskState[t] == TaskState::Pending) job.pending.push_back(t);
@@ -120,6 +138,14 @@ void Coordinator::startRunning(Job& job) {
   job.status.b = job.plan->norm.b;
   job.status.bStdErr = job.plan->norm.bStdErr;
   job.status.bootstrapSeconds = job.plan->norm.bootstrapSeconds;
+}
+
+void Coordinator::foldAccepted(Job& job, uint32_t task, PartialResult result) {
+  job.waiting.emplace(task, std::move(result));
+  // Task order, whatever the arrival order: the sum's bits never depend on which worker was faster.
+  for (auto it = job.waiting.begin(); it != job.waiting.end() && it->first == job.mergedTasks;
+       it = job.waiting.erase(it), ++job.mergedTasks)
+    job.merged.add(it->second);
 }
 
 void Coordinator::refreshProgress(Job& job) {

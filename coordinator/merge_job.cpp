@@ -1,5 +1,6 @@
-// The final merge of a job whose tasks are all accepted: sums them in task order (the bytes never depend
-// on arrival order), develops and writes image.exr + image.png, and records the refined b.
+// The final merge of a job whose tasks are all accepted: their sum in task order is already made (the
+// coordinator adds each accepted task once the tasks before it are in, so the bytes never depend on
+// arrival order); it is developed into image.exr + image.png, and the refined b is recorded.
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
@@ -8,7 +9,6 @@
 
 #include "common/job/mlt_job.h"
 #include "coordinator/coordinator.h"
-#include "proto/convert.h"
 
 namespace fs = std::filesystem;
 
@@ -17,27 +17,21 @@ namespace mlt::farm {
 void Coordinator::merge(int64_t id) {
   std::shared_ptr<const JobPlan> plan;
   JobIdentity identity;
-  size_t tasks = 0;
+  PartialResult merged;  // every task, summed in task order as they were accepted (upload.cpp)
+  std::string error;
   {
     std::lock_guard lock(mu_);
     Job& job = jobs_.at(id);
     plan = job.plan;
     identity = {job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
-    tasks = job.tasks.size();
+    if (job.mergedTasks != job.tasks.size())
+      error = fmt::format("task {} is accepted but not summed", job.mergedTasks);
+    merged = std::move(job.merged);
+    job.merged = {};
+    job.waiting.clear();
   }
-  std::string error;
   std::optional<RefinedB> refined;  // b as the image was developed with (bootstrap + large steps)
-  try {
-    PartialResult merged = emptyPartial(*plan);
-    for (uint32_t t = 0; t < tasks; ++t) {  // index order: the bytes never depend on arrival order
-      std::optional<std::string> blob;
-      {
-        std::lock_guard lock(mu_);
-        blob = store_->loadResult(id, t);
-      }
-      if (!blob) throw std::runtime_error(fmt::format("task {} has no stored result", t));
-      merged.add(wire::parsePartial(*blob));
-    }
+  if (error.empty()) try {
     fs::path dir = jobDir(id);
     fs::create_directories(dir);
     writeFinalImages((dir / "image.tmp.exr").string(), (dir / "image.tmp.png").string(), identity, *plan, merged);

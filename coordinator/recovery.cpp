@@ -40,10 +40,10 @@ void Coordinator::recover() {
     }
     j.status.state = state;
     if (j.plan && (state == JobState::Running || state == JobState::Merging || state == JobState::Done)) {
-      startRunning(j);
+      startRunning(j, /*loadResults=*/state != JobState::Done);  // the sum so far, from the result files
       if (state != JobState::Done) j.status.state = j.status.tasksDone == j.tasks.size() ? JobState::Merging : JobState::Running;
     } else if (j.plan && isTerminal(state)) {
-      startRunning(j);  // failed or cancelled: show what was accepted (it is kept), lease nothing
+      startRunning(j, false);  // failed or cancelled: show what was accepted (it is kept), lease nothing
       j.pending.clear();
     }
     refreshProgress(j);

@@ -3,6 +3,7 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -134,7 +135,14 @@ void Worker::runTask(Active* a) {
       throw std::runtime_error(fmt::format("debug: work unit {} fails on purpose (--debug-fail-unit)", opt_.failUnit));
     const auto t0 = std::chrono::steady_clock::now();
     PartialResult result;
-    if (!farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel)) {
+    // Up to every thread on this task's units, inside the worker's one arena of `threads` slots: the tasks
+    // in hand share the threads unit by unit (never more runnable threads than cores), and the job's last
+    // task does not leave the other threads idle.
+    bool complete = false;
+    arena_->execute([&] {
+      complete = farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel, size_t(opt_.threads));
+    });
+    if (!complete) {
       spdlog::info("worker={} job={} task={} event=abandoned", workerId, l.jobId, l.taskIndex);
       releaseSlot(a);
       a->finished = true;
@@ -206,6 +214,7 @@ void Worker::reapFinished() {
 int Worker::run() {
   // Units may use TBB inside; never more threads than we were given.
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(opt_.threads));
+  arena_ = std::make_unique<tbb::task_arena>(opt_.threads);
   if (!registerWithBackoff()) return stop_ ? 0 : 1;
   std::thread heartbeat([this] { heartbeatLoop(); });
   int attempt = 0;

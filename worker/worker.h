@@ -5,6 +5,8 @@
 // after a coordinator restart. stop() (SIGTERM) stops leasing, abandons unfinished tasks between work
 // units and returns their leases so other workers pick them up at once.
 #pragma once
+#include <tbb/task_arena.h>
+
 #include <atomic>
 #include <condition_variable>
 #include <map>
@@ -67,6 +69,7 @@ class Worker {
   double heartbeatSeconds_ = 1;
   std::vector<std::unique_ptr<Active>> active_;
   std::map<std::string, std::shared_ptr<const JobPlan>> plans_;
+  std::unique_ptr<tbb::task_arena> arena_;  // every task's units run here: at most `threads` at once
 };
 
 }  // namespace mlt::farm

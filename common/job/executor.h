@@ -28,9 +28,9 @@ size_t executeUnits(const UnitExecution& e);
 // A zero partial result with the plan's film size (what units are summed into).
 PartialResult emptyPartial(const JobPlan& plan);
 
-// Units [begin, end) of `plan`, one after another, summed in index order into a zero partial of the
-// plan's film size. Returns false (result incomplete) if `cancel` became true between units.
+// Units [begin, end) of `plan`, up to `parallelism` at a time, summed in index order into a zero partial
+// of the plan's film size. Returns false (result incomplete) if `cancel` became true between units.
 bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
-              const std::atomic<bool>* cancel = nullptr);
+              const std::atomic<bool>* cancel = nullptr, size_t parallelism = 1);
 
 }  // namespace mlt
