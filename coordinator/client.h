@@ -1,6 +1,6 @@
 // A client of the coordinator's API (used by the `mltfarm submit|status|watch|cancel|fetch|jobs`
 // subcommands, the embedded farm and the tests). Every call has a deadline; failures throw
-// RpcError carrying the gRPC status code and message.
+// RpcError (proto/channel.h) carrying the gRPC status code and message.
 #pragma once
 #include <grpcpp/grpcpp.h>
 
@@ -11,32 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
+#include "proto/channel.h"
 #include "proto/convert.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 
 namespace mlt::farm {
-
-class RpcError : public std::runtime_error {
- public:
-  RpcError(grpc::StatusCode code, const std::string& rpc, const std::string& message);
-  grpc::StatusCode code() const { return code_; }
-  const std::string& message() const { return message_; }
- private:
-  grpc::StatusCode code_;
-  std::string message_;
-};
-
-struct ChannelOptions {
-  std::string address;   // host:port
-  std::string token;     // sent as "authorization: Bearer TOKEN" when set
-  std::string tlsCa;     // PEM root certificate: TLS on when set
-};
-std::shared_ptr<grpc::Channel> makeChannel(const ChannelOptions& o);
-// Adds the token and a deadline to a context.
-void prepareContext(grpc::ClientContext& ctx, const ChannelOptions& o, std::chrono::milliseconds deadline);
-const char* statusCodeName(grpc::StatusCode code);
 
 class FarmClient {
  public:

@@ -2,9 +2,12 @@
 //   submit -> load + validate the scene -> Queued -> (planner thread) planJob = bootstrap -> Running:
 //   tasks leased FIFO within priorities (higher priority first, then submission order), leases renewed
 //   by heartbeats and requeued when they time out -> each task accepted once, keyed by (job, task),
-//   persisted before it is acknowledged -> Merging (tasks summed in index order) -> Done (EXR + PNG).
+//   persisted (result_store.h) before it is acknowledged and summed in memory in task order as soon as
+//   the tasks before it are in -> Merging (develop the sum) -> Done (EXR + PNG).
 // Restarted on the same state directory it reloads every job, its plan and its accepted tasks, and
-// continues where it stopped.
+// continues where it stopped. One file per role: client_handler.cpp, worker_handler.cpp, upload.cpp,
+// planner.cpp, merge_job.cpp, preview.cpp, reaper.cpp, recovery.cpp; coordinator.cpp holds the shared
+// state helpers.
 #pragma once
 #include <atomic>
 #include <chrono>
@@ -21,6 +24,7 @@
 #include "coordinator/handler.h"
 #include "coordinator/job_store.h"
 #include "coordinator/merge.h"
+#include "coordinator/result_store.h"
 
 namespace mlt::farm {
 
@@ -75,6 +79,12 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     Clock::time_point renderStart;
     uint64_t workDoneAtStart = 0;  // accepted before this process started (for the ETA)
     uint32_t previewTasks = 0;     // tasks in the last preview
+    // The accepted results, summed in task order as they arrive: `merged` holds tasks [0, mergedTasks);
+    // an accepted task beyond that waits in `waiting` until the tasks before it are in. Only while the
+    // job runs (emptied once the image is written).
+    PartialResult merged;
+    uint32_t mergedTasks = 0;
+    std::map<uint32_t, PartialResult> waiting;
   };
   struct LeaseRec {
     std::string workerId;
@@ -87,11 +97,14 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     Clock::time_point lastSeen;
   };
 
+  void recover();                          // reload the state directory (recovery.cpp)
   Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
   void touch(Job& job);                    // bump version, notify watchers; caller holds mu_
   void refreshProgress(Job& job);
   void setState(Job& job, JobState s, const std::string& error = {});
-  void startRunning(Job& job);             // plan known: build tasks, requeue the unaccepted ones
+  // Plan known: build tasks, mark the stored results accepted and (loadResults) sum them, queue the rest.
+  void startRunning(Job& job, bool loadResults = true);
+  void foldAccepted(Job& job, uint32_t task, PartialResult result);  // caller holds mu_
   // A leased task's attempt failed: requeue it, or fail the job when it is out of attempts. Returns true
   // if the job failed. Caller holds mu_.
   bool taskAttemptFailed(Job& job, uint32_t task, const std::string& reason);
@@ -104,10 +117,10 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   void writePreview(int64_t id, std::unique_lock<std::mutex>& lock);   // unlocks while merging
   void merge(int64_t id);
   void planOne(int64_t id);
-  static uint64_t unitWork(const JobPlan& plan, const WorkUnit& u);
 
   CoordinatorOptions opt_;
-  std::unique_ptr<JobStore> store_;
+  std::unique_ptr<JobStore> store_;     // jobs and plans (SQLite)
+  std::unique_ptr<ResultStore> results_;  // accepted task results (files)
   std::mutex mu_;
   std::condition_variable changed_;     // status changes (watchers)
   std::condition_variable work_;        // planner: jobs to plan or merge

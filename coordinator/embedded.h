@@ -6,7 +6,7 @@
 #include <functional>
 #include <string>
 
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
 #include "proto/convert.h"
 
 namespace mlt::farm {

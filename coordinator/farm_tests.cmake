@@ -6,7 +6,7 @@ file(GLOB MLTFARM_FARM_TESTS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/farm_
 foreach(src ${MLTFARM_FARM_TESTS})
   get_filename_component(name ${src} NAME_WE)
   if(TARGET ${name})
-    target_link_libraries(${name} PRIVATE mltfarm_worker)
+    target_link_libraries(${name} PRIVATE mltfarm_worker mltfarm_coord)
     add_dependencies(${name} mltfarm mltfarm-coordinator mltfarm-worker)
     target_compile_definitions(${name} PRIVATE MLTFARM_TOOLS_DIR="${CMAKE_BINARY_DIR}/tools")
   endif()

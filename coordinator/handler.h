@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "common/methods/registry.h"
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
 
 namespace mlt::farm {
 

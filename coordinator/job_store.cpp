@@ -1,4 +1,4 @@
-// SQLite persistence of jobs, plans and accepted partial results (see job_store.h).
+// SQLite persistence of jobs and plans (see job_store.h).
 #include "coordinator/job_store.h"
 
 #include <sqlite3.h>
@@ -66,8 +66,6 @@ JobStore::JobStore(const std::string& path) : path_(path) {
        " id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT, priority INTEGER, state INTEGER,"
        " settings BLOB, scene_hash TEXT, scene_file TEXT, plan BLOB, tasks INTEGER, error TEXT,"
        " submitted_at REAL)");
-  exec("CREATE TABLE IF NOT EXISTS results("
-       " job INTEGER, task INTEGER, data BLOB, PRIMARY KEY(job, task))");
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
@@ -123,34 +121,6 @@ std::vector<JobRecord> JobStore::loadJobs() {
     out.push_back(std::move(r));
   }
   return out;
-}
-
-bool JobStore::insertResult(int64_t job, uint32_t task, const std::string& blob) {
-  Stmt s(db_, "INSERT OR IGNORE INTO results(job, task, data) VALUES(?,?,?)", path_);
-  s.bind(1, job).bind(2, int64_t(task)).bindBlob(3, blob);
-  s.step();
-  return sqlite3_changes(db_) == 1;
-}
-
-std::vector<uint32_t> JobStore::acceptedTasks(int64_t job) {
-  Stmt s(db_, "SELECT task FROM results WHERE job=? ORDER BY task", path_);
-  s.bind(1, job);
-  std::vector<uint32_t> out;
-  while (s.step()) out.push_back(uint32_t(s.i64(0)));
-  return out;
-}
-
-std::optional<std::string> JobStore::loadResult(int64_t job, uint32_t task) {
-  Stmt s(db_, "SELECT data FROM results WHERE job=? AND task=?", path_);
-  s.bind(1, job).bind(2, int64_t(task));
-  if (!s.step()) return std::nullopt;
-  return s.str(0);
-}
-
-void JobStore::deleteResults(int64_t job) {
-  Stmt s(db_, "DELETE FROM results WHERE job=?", path_);
-  s.bind(1, job);
-  s.step();
 }
 
 }  // namespace mlt::farm

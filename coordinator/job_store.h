@@ -1,7 +1,7 @@
-// The coordinator's persistent state: an embedded SQLite database (`STATE_DIR/farm.db`) holding job
-// records, each job's plan, and every accepted partial result (raw film bytes as a BLOB). Written
-// before a result is acknowledged, so a coordinator killed at any point loses nothing it accepted.
-// Not thread-safe: the caller serializes access.
+// The coordinator's persistent job table: an embedded SQLite database (`STATE_DIR/farm.db`) holding job
+// records and each job's plan, written on every state change (a few rows per job, off the hot path).
+// Accepted task results live beside it as files (result_store.h). Not thread-safe: the caller
+// serializes access.
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -36,11 +36,6 @@ class JobStore {
   void updateState(int64_t id, int state, const std::string& error);
   void setPlan(int64_t id, const std::string& plan, uint32_t tasks, int state);
   std::vector<JobRecord> loadJobs();
-  // Inserts unless (job, task) exists; returns false for a duplicate.
-  bool insertResult(int64_t job, uint32_t task, const std::string& blob);
-  std::vector<uint32_t> acceptedTasks(int64_t job);
-  std::optional<std::string> loadResult(int64_t job, uint32_t task);
-  void deleteResults(int64_t job);
 
  private:
   void exec(const char* sql);

@@ -1,4 +1,4 @@
-// Tasks, merging, development and partial EXRs (see merge.h).
+// Merging, development and partial EXRs (see merge.h).
 #include "coordinator/merge.h"
 
 #include "common/job/executor.h"
@@ -53,22 +53,6 @@ std::string unitList(const std::vector<uint32_t>& units) {
 }
 
 }  // namespace
-
-std::vector<TaskRange> splitTasks(const JobPlan& plan) {
-  const uint64_t units = plan.units.size();
-  if (units == 0) return {};
-  const uint64_t filmBytes = std::max<uint64_t>(1, wire::filmByteSize(plan.settings.width, plan.settings.height));
-  const uint64_t byMemory = std::max<uint64_t>(4, (512ull << 20) / filmBytes);
-  const uint64_t T = std::min<uint64_t>({units, 64, byMemory});
-  std::vector<TaskRange> tasks(T);
-  for (uint64_t t = 0; t < T; ++t) tasks[t] = {uint32_t(t * units / T), uint32_t((t + 1) * units / T)};
-  return tasks;
-}
-
-bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, PartialResult& out,
-             const std::atomic<bool>* cancel) {
-  return runUnits(scene, plan, range.begin, range.end, out, cancel);  // the one executor (common/job/executor.h)
-}
 
 ImageMetadata finalMetadata(const JobIdentity& id, const JobPlan& plan, const PartialResult& merged) {
   // The keys of `mltfarm render --in-process` (tools/cli/render_local.cpp), minus wall-clock values that

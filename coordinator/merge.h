@@ -1,13 +1,6 @@
-// Tasks, merging and development: the one place where a job's partial results become an image, shared
-// by the coordinator, the worker (which merges the units of a task) and `mltfarm merge` (offline), so
-// all three produce the same bytes.
-//
-// A job's work units are grouped into a fixed number of *tasks* (contiguous unit ranges, chosen from
-// the plan alone, never from the number of workers). A task is what a worker leases and uploads; the
-// coordinator accepts each task once, keyed by (job, task). Sums are always formed in unit-index order:
-// within a task the worker adds units begin..end-1 to a zero film, the coordinator adds tasks 0..T-1 to
-// a zero film. Floating-point addition is not associative, so this fixed order is what makes the image
-// independent of worker count and arrival order.
+// Merging and development: the one place where a job's partial results become an image, shared by the
+// coordinator and `mltfarm merge` (offline), so both produce the same bytes. Tasks and the order in
+// which they are summed: common/farm/tasks.h.
 #pragma once
 #include <atomic>
 #include <cstdint>
@@ -17,22 +10,9 @@
 #include "common/io/exr_io.h"
 #include "common/job/executor.h"  // emptyPartial, runUnits
 #include "common/methods/registry.h"
+#include "common/farm/tasks.h"
 
 namespace mlt::farm {
-
-struct TaskRange {
-  uint32_t begin = 0, end = 0;  // work units [begin, end)
-};
-
-// At most 64 tasks, at least min(units, 4), and few enough that the stored partial films stay under
-// ~512 MiB.
-std::vector<TaskRange> splitTasks(const JobPlan& plan);
-
-
-// Runs units [range.begin, range.end) in order, summing into a zero partial. Returns false (result
-// incomplete) if `cancel` becomes true between units.
-bool runTask(const RenderScene& scene, const JobPlan& plan, TaskRange range, PartialResult& out,
-             const std::atomic<bool>* cancel = nullptr);
 
 // Who a job is, for metadata.
 struct JobIdentity {

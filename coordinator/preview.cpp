@@ -12,7 +12,6 @@
 #include <fmt/format.h>
 
 #include "coordinator/coordinator.h"
-#include "proto/convert.h"
 
 namespace fs = std::filesystem;
 
@@ -22,28 +21,22 @@ void Coordinator::writePreview(int64_t id, std::unique_lock<std::mutex>& lock) {
   Job& job = jobs_.at(id);
   std::shared_ptr<const JobPlan> plan = job.plan;
   const JobIdentity identity{job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
-  std::vector<uint32_t> accepted;
-  for (uint32_t t = 0; t < job.taskState.size(); ++t)
-    if (job.taskState[t] == TaskState::Accepted) accepted.push_back(t);
-  job.previewTasks = uint32_t(accepted.size());
+  // The running sum (tasks [0, mergedTasks)) and the accepted tasks beyond it, copied under the lock and
+  // added in task order outside it: the same additions, in the same order, as the final merge.
+  PartialResult merged = job.merged;
+  std::vector<PartialResult> later;
+  for (const auto& [t, r] : job.waiting) later.push_back(r);
+  const size_t accepted = job.mergedTasks + later.size();
+  job.previewTasks = uint32_t(accepted);
   lock.unlock();
   try {
-    PartialResult merged = emptyPartial(*plan);
-    for (uint32_t t : accepted) {  // task order, like the final merge
-      std::optional<std::string> blob;
-      {
-        std::lock_guard relock(mu_);
-        blob = store_->loadResult(id, t);
-      }
-      if (!blob) throw std::runtime_error(fmt::format("task {} has no stored result", t));
-      merged.add(wire::parsePartial(*blob));
-    }
+    for (const PartialResult& r : later) merged.add(r);
     const fs::path dir = jobDir(id);
     fs::create_directories(dir);
     writeFinalImages((dir / "preview.tmp.exr").string(), (dir / "preview.tmp.png").string(), identity, *plan, merged);
     fs::rename(dir / "preview.tmp.exr", dir / "preview.exr");
     fs::rename(dir / "preview.tmp.png", dir / "preview.png");
-    spdlog::info("job={} event=preview tasks={}/{} units={}", identity.jobId, accepted.size(),
+    spdlog::info("job={} event=preview tasks={}/{} units={}", identity.jobId, accepted,
                  splitTasks(*plan).size(), merged.units.size());
   } catch (const std::exception& e) {
     spdlog::warn("job={} event=preview_failed error=\"{}\"", identity.jobId, e.what());

@@ -9,7 +9,8 @@
 #include <fstream>
 #include <map>
 
-#include "coordinator/convert.h"
+#include "proto/farm_convert.h"
+#include "proto/sparse_film.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 namespace mlt::farm {
@@ -244,7 +245,9 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       const size_t layers = wire::headerLayers(ph).size();
       if (layers > wire::kMaxSplatLayer + 1)
         throw wire::WireError("partial.splat_layers", fmt::format("{} layers", layers));
-      if (ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height(), layers))
+      const bool raw = ph.film_encoding() == v1::FILM_RAW;
+      if (raw ? ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height(), layers)
+              : ph.film_bytes() > wire::maxZeroRunsBytes(ph.width(), ph.height(), layers))
         throw wire::WireError("partial.film_bytes", fmt::format("{} for a {}x{} film with {} splat layers", ph.film_bytes(),
                                                                 ph.width(), ph.height(), layers));
       std::string film;

@@ -1,5 +1,6 @@
 // Wire <-> domain conversion with range validation (see convert.h).
 #include "proto/convert.h"
+#include "proto/sparse_film.h"
 
 #include "common/methods/registry.h"
 
@@ -398,7 +399,12 @@ std::vector<uint32_t> headerLayers(const v1::PartialHeader& h) {
 PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes) {
   checkVersion(h.format_version(), "PartialHeader");
   PartialResult r;
-  r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite(), headerLayers(h));
+  if (h.film_encoding() == v1::FILM_ZERO_RUNS)
+    r.film = decodeFilmZeroRuns(h.width(), h.height(), filmBytes, h.non_finite(), headerLayers(h));
+  else if (h.film_encoding() == v1::FILM_RAW)
+    r.film = decodeFilm(h.width(), h.height(), filmBytes, h.non_finite(), headerLayers(h));
+  else
+    throw WireError("partial.film_encoding", fmt::format("unknown encoding {}", int(h.film_encoding())));
   r.samples = h.samples();
   r.stats = fromProto(h.stats());
   r.units.assign(h.units().begin(), h.units().end());
@@ -426,13 +432,20 @@ PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film) 
   return r;
 }
 
-std::string serializePartial(const PartialResult& r) {
-  std::string header = deterministicBytes(partialHeader(r));
+std::string serializePartial(const PartialResult& r, bool zeroRuns) {
+  v1::PartialHeader h = partialHeader(r);
+  std::string film = zeroRuns ? encodeFilmZeroRuns(r.film) : encodeFilm(r.film);
+  if (zeroRuns) {
+    h.set_film_encoding(v1::FILM_ZERO_RUNS);
+    h.set_film_bytes(film.size());
+  }
+  std::string header = deterministicBytes(h);
   std::string out(8, '\0');
   uint64_t len = header.size();
   std::memcpy(out.data(), &len, 8);
+  out.reserve(8 + header.size() + film.size());
   out += header;
-  out += encodeFilm(r.film);
+  out += film;
   return out;
 }
 

@@ -70,14 +70,15 @@ Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFin
 size_t filmByteSize(int width, int height, size_t splatLayers = 1);
 // The header's splat layers ({0} when it lists none).
 std::vector<uint32_t> headerLayers(const v1::PartialHeader& h);
-PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes);  // validates
+// Decodes the film as h.film_encoding says (raw or zero runs); validates.
+PartialResult fromProto(const v1::PartialHeader& h, const std::string& filmBytes);
 // The header alone as bytes (partial EXR metadata) and back, with the film supplied separately.
 std::string partialHeaderBytes(const PartialResult& r);
 PartialResult partialFromHeaderBytes(const std::string& headerBytes, Film film);  // validates the size
 
-// Whole PartialResult as one blob (header length + header + film bytes): the coordinator's database
-// and the partial EXR metadata use it.
-std::string serializePartial(const PartialResult& r);
+// Whole PartialResult as one blob (header length + header + film bytes): the coordinator's result files
+// use it, with the film's zero runs left out (zeroRuns, proto/sparse_film.h).
+std::string serializePartial(const PartialResult& r, bool zeroRuns = false);
 PartialResult parsePartial(const std::string& blob);
 
 std::string jobPlanBytes(const JobPlan& plan);           // deterministic serialization

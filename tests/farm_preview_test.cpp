@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "common/io/exr_io.h"
-#include "coordinator/scene_loading.h"
+#include "common/farm/scene_loading.h"
 #include "tests/farm/farm_harness.h"
 
 namespace mlt::farm::test {

@@ -4,14 +4,17 @@
 #include <fmt/format.h>
 #include <map>
 
-#include "coordinator/bundle.h"
+#include "common/farm/bundle.h"
 #include "proto/convert.h"
+#include "proto/sparse_film.h"
 
 namespace mlt::farm {
 
 UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o, const UploadTarget& target,
                           const PartialResult& result, size_t* chunks) {
-  const std::string film = wire::encodeFilm(result.film);
+  // Zero runs left out: most of a task's film is zero words (proto/sparse_film.h), and every byte sent is
+  // copied several times on both sides.
+  const std::string film = wire::encodeFilmZeroRuns(result.film);
   grpc::ClientContext ctx;
   // A generous deadline that grows with the film: 60 s + 1 s per MiB.
   prepareContext(ctx, o, std::chrono::milliseconds(60'000 + film.size() / 1024));
@@ -25,6 +28,8 @@ UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o
   h->set_job_id(target.jobId);
   h->set_task_index(target.taskIndex);
   *h->mutable_partial() = wire::partialHeader(result);
+  h->mutable_partial()->set_film_encoding(v1::FILM_ZERO_RUNS);
+  h->mutable_partial()->set_film_bytes(film.size());
   bool ok = writer->Write(req);
   size_t sent = 0;
   for (size_t offset = 0; ok && offset < film.size(); offset += wire::kMaxChunkBytes) {

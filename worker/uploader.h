@@ -5,9 +5,10 @@
 #include <string>
 #include <vector>
 
+#include "common/farm/farm_types.h"
 #include "common/methods/registry.h"
-#include "coordinator/client.h"
-#include "coordinator/farm_types.h"
+#include "proto/channel.h"
+#include "proto/convert.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 namespace mlt::farm {

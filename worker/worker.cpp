@@ -3,6 +3,7 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -10,22 +11,12 @@
 #include <fmt/format.h>
 #include <random>
 
-#include "coordinator/bundle.h"
-#include "coordinator/merge.h"
-#include "coordinator/convert.h"
-#include "coordinator/scene_loading.h"
-#include "proto/convert.h"
-#include "worker/uploader.h"
+#include "common/farm/tasks.h"
 
 namespace fs = std::filesystem;
 
 namespace mlt::farm {
 namespace {
-
-bool transient(grpc::StatusCode c) {
-  return c == grpc::UNAVAILABLE || c == grpc::DEADLINE_EXCEEDED || c == grpc::CANCELLED || c == grpc::UNKNOWN ||
-         c == grpc::INTERNAL || c == grpc::RESOURCE_EXHAUSTED;
-}
 
 std::string hostName() {
   char buf[256] = {};
@@ -33,16 +24,19 @@ std::string hostName() {
   return buf;
 }
 
+WorkerOptions withDefaults(WorkerOptions o) {
+  if (o.threads <= 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+  if (o.cacheDir.empty())
+    o.cacheDir = (fs::temp_directory_path() / fmt::format("mltfarm-worker-cache-{}", getuid())).string();
+  return o;
+}
+
 }  // namespace
 
-Worker::Worker(WorkerOptions options) : opt_(std::move(options)) {
-  if (opt_.threads <= 0) opt_.threads = int(std::max(1u, std::thread::hardware_concurrency()));
-  if (opt_.cacheDir.empty())
-    opt_.cacheDir = (fs::temp_directory_path() / fmt::format("mltfarm-worker-cache-{}", getuid())).string();
-  fs::create_directories(opt_.cacheDir);
-  channel_ = makeChannel(opt_.coordinator);
-  stub_ = v1::WorkerService::NewStub(channel_);
-}
+Worker::Worker(WorkerOptions options)
+    : opt_(withDefaults(std::move(options))),
+      client_(opt_.coordinator),
+      scenes_(opt_.cacheDir, [this](const std::string& hash) { return client_.scene(hash); }) {}
 
 Worker::~Worker() {
   stop_ = true;
@@ -64,29 +58,22 @@ void Worker::backoff(int& attempt) {
 bool Worker::registerWithBackoff() {
   int attempt = 0;
   while (!stop_) {
-    grpc::ClientContext ctx;
-    prepareContext(ctx, opt_.coordinator, std::chrono::seconds(10));
-    v1::RegisterRequest req;
-    req.set_format_version(wire::kFormatVersion);
-    req.set_hostname(hostName());
-    req.set_threads(opt_.threads);
-    req.set_pid(getpid());
-    v1::RegisterResponse resp;
-    grpc::Status s = stub_->Register(&ctx, req, &resp);
-    if (s.ok()) {
+    try {
+      Registration r = client_.registerWorker({hostName(), opt_.threads, getpid()});
       std::lock_guard lock(mu_);
-      workerId_ = resp.worker_id();
-      heartbeatSeconds_ = resp.heartbeat_interval_seconds();
+      workerId_ = r.workerId;
+      heartbeatSeconds_ = r.heartbeatSeconds;
       spdlog::info("worker={} event=registered coordinator={} threads={}", workerId_, opt_.coordinator.address,
                    opt_.threads);
       reregister_ = false;
       return true;
+    } catch (const RpcError& e) {
+      if (!isTransient(e.code())) {
+        spdlog::error("event=register_failed status={} message=\"{}\"", statusCodeName(e.code()), e.message());
+        return false;
+      }
+      spdlog::warn("event=coordinator_unavailable attempt={} message=\"{}\"", attempt, e.message());
     }
-    if (!transient(s.error_code())) {
-      spdlog::error("event=register_failed status={} message=\"{}\"", statusCodeName(s.error_code()), s.error_message());
-      return false;
-    }
-    spdlog::warn("event=coordinator_unavailable attempt={} message=\"{}\"", attempt, s.error_message());
     backoff(attempt);
   }
   return false;
@@ -104,22 +91,18 @@ void Worker::heartbeatLoop() {
       for (auto& a : active_)
         if (!a->finished) leases.push_back(a->lease.leaseId);
     }
-    grpc::ClientContext ctx;
-    prepareContext(ctx, opt_.coordinator, std::chrono::milliseconds(int(std::max(1.0, 2 * interval) * 1000)));
-    v1::HeartbeatRequest req;
-    req.set_format_version(wire::kFormatVersion);
-    req.set_worker_id(id);
-    for (auto& l : leases) req.add_lease_ids(l);
-    v1::HeartbeatResponse resp;
-    grpc::Status s = stub_->Heartbeat(&ctx, req, &resp);
-    if (s.ok()) {
-      if (resp.unknown_worker()) reregister_ = true;
+    try {
+      HeartbeatReply r =
+          client_.heartbeat(id, leases, std::chrono::milliseconds(int(std::max(1.0, 2 * interval) * 1000)));
+      if (r.unknownWorker) reregister_ = true;
       std::lock_guard lock(mu_);
-      for (const std::string& c : resp.cancelled_lease_ids())
+      for (const std::string& c : r.cancelledLeases)
         for (auto& a : active_)
           if (a->lease.leaseId == c && !a->cancel.exchange(true))
             spdlog::info("worker={} job={} task={} lease={} event=cancelled_by_coordinator", workerId_, a->lease.jobId,
                          a->lease.taskIndex, c);
+    } catch (const RpcError&) {
+      // The coordinator is away: the lease loop backs off and registers again; nothing to do here.
     }
     for (double slept = 0; slept < interval && !stop_; slept += 0.02)
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -131,37 +114,9 @@ std::shared_ptr<const JobPlan> Worker::planFor(const std::string& jobId) {
     std::lock_guard lock(mu_);
     if (auto it = plans_.find(jobId); it != plans_.end()) return it->second;
   }
-  auto plan = std::make_shared<const JobPlan>(fetchPlan(*stub_, opt_.coordinator, jobId));
+  auto plan = std::make_shared<const JobPlan>(client_.plan(jobId));
   std::lock_guard lock(mu_);
   return plans_.emplace(jobId, plan).first->second;
-}
-
-std::shared_ptr<const RenderScene> Worker::sceneFor(const Lease& l, const JobPlan& plan) {
-  std::string key = fmt::format("{}@{}x{}", l.sceneHash, plan.settings.width, plan.settings.height);
-  for (const auto& [name, value] : l.defines) key += fmt::format("|{}={}", name, value);
-  std::shared_ptr<SceneEntry> entry;
-  {
-    std::lock_guard lock(mu_);
-    auto& e = scenes_[key];
-    if (!e) e = std::make_shared<SceneEntry>();
-    entry = e;
-  }
-  std::lock_guard lock(entry->mu);  // one thread fetches and builds; the others wait for it
-  if (entry->scene) return entry->scene;
-  const fs::path dir = fs::path(opt_.cacheDir) / l.sceneHash;
-  if (!fs::exists(dir)) {
-    std::vector<BundleFile> files = fetchScene(*stub_, opt_.coordinator, l.sceneHash);
-    const fs::path tmp = dir.string() + fmt::format(".tmp-{}", getpid());
-    fs::remove_all(tmp);
-    writeBundle(tmp.string(), files);
-    std::error_code ec;
-    fs::rename(tmp, dir, ec);  // another worker on this machine may have won: same bytes
-    if (ec) fs::remove_all(tmp);
-    spdlog::info("event=scene_cached scene_hash={} files={}", l.sceneHash.substr(0, 12), files.size());
-  }
-  SceneDesc desc = loadSceneDesc((dir / l.sceneFile).string(), l.defines);
-  entry->scene = buildRenderScene(std::move(desc), plan.settings.width, plan.settings.height);
-  return entry->scene;
 }
 
 void Worker::runTask(Active* a) {
@@ -173,14 +128,21 @@ void Worker::runTask(Active* a) {
   }
   try {
     auto plan = planFor(l.jobId);
-    auto scene = sceneFor(l, *plan);
+    auto scene = scenes_.get(l.sceneHash, l.sceneFile, l.defines, plan->settings.width, plan->settings.height);
     for (int slept = 0; slept < opt_.taskDelayMs && !a->cancel; slept += 10)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     if (opt_.failUnit >= int64_t(l.unitBegin) && opt_.failUnit < int64_t(l.unitEnd))
       throw std::runtime_error(fmt::format("debug: work unit {} fails on purpose (--debug-fail-unit)", opt_.failUnit));
     const auto t0 = std::chrono::steady_clock::now();
     PartialResult result;
-    if (!farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel)) {
+    // Up to every thread on this task's units, inside the worker's one arena of `threads` slots: the tasks
+    // in hand share the threads unit by unit (never more runnable threads than cores), and the job's last
+    // task does not leave the other threads idle.
+    bool complete = false;
+    arena_->execute([&] {
+      complete = farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel, size_t(opt_.threads));
+    });
+    if (!complete) {
       spdlog::info("worker={} job={} task={} event=abandoned", workerId, l.jobId, l.taskIndex);
       releaseSlot(a);
       a->finished = true;
@@ -193,13 +155,13 @@ void Worker::runTask(Active* a) {
     int attempt = 0;
     while (true) {
       try {
-        UploadReply r = uploadPartial(*stub_, opt_.coordinator, {workerId, l.leaseId, l.jobId, l.taskIndex}, result);
+        UploadReply r = client_.upload({workerId, l.leaseId, l.jobId, l.taskIndex}, result);
         spdlog::info("worker={} job={} task={} units={}-{} lease={} event=uploaded accepted={} seconds={:.3f} message=\"{}\"",
                      workerId, l.jobId, l.taskIndex, l.unitBegin, l.unitEnd - 1, l.leaseId, r.accepted, result.seconds,
                      r.message);
         break;
       } catch (const RpcError& e) {
-        if (!transient(e.code()) || attempt > 12 || (stop_ && !opt_.drain)) throw;
+        if (!isTransient(e.code()) || attempt > 12 || (stop_ && !opt_.drain)) throw;
         spdlog::warn("worker={} job={} task={} event=upload_retry attempt={} error=\"{}\"", workerId, l.jobId,
                      l.taskIndex, attempt, e.what());
         backoff(attempt);
@@ -210,7 +172,7 @@ void Worker::runTask(Active* a) {
                   l.leaseId, e.what());
     // A coordinator that cannot be reached gets no report: the lease expires there and is counted then.
     const auto* rpc = dynamic_cast<const RpcError*>(&e);
-    if (!a->cancel && !(rpc && transient(rpc->code()))) reportFailure(l, workerId, e.what());
+    if (!a->cancel && !(rpc && isTransient(rpc->code()))) reportFailure(l, workerId, e.what());
   }
   releaseSlot(a);
   a->finished = true;
@@ -226,19 +188,15 @@ void Worker::releaseSlot(Active* a) {
 }
 
 void Worker::reportFailure(const Lease& l, const std::string& workerId, const std::string& message) {
-  grpc::ClientContext ctx;
-  prepareContext(ctx, opt_.coordinator, std::chrono::seconds(10));
-  v1::ReportFailureRequest req;
-  req.set_format_version(wire::kFormatVersion);
-  req.set_worker_id(workerId);
-  req.set_lease_id(l.leaseId);
-  req.set_job_id(l.jobId);
-  req.set_task_index(l.taskIndex);
-  req.set_message(message.substr(0, 60 * 1024));
-  v1::ReportFailureResponse resp;
-  grpc::Status s = stub_->ReportFailure(&ctx, req, &resp);
+  bool ok = true;
+  FailureReply r;
+  try {
+    r = client_.reportFailure(workerId, l, message);
+  } catch (const RpcError&) {
+    ok = false;  // the lease expires on the coordinator and is counted there
+  }
   spdlog::info("worker={} job={} task={} lease={} event=failure_reported ok={} job_failed={}", workerId, l.jobId,
-               l.taskIndex, l.leaseId, s.ok(), resp.job_failed());
+               l.taskIndex, l.leaseId, ok, r.jobFailed);
 }
 
 void Worker::reapFinished() {
@@ -256,6 +214,7 @@ void Worker::reapFinished() {
 int Worker::run() {
   // Units may use TBB inside; never more threads than we were given.
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(opt_.threads));
+  arena_ = std::make_unique<tbb::task_arena>(opt_.threads);
   if (!registerWithBackoff()) return stop_ ? 0 : 1;
   std::thread heartbeat([this] { heartbeatLoop(); });
   int attempt = 0;
@@ -279,40 +238,35 @@ int Worker::run() {
     }
     if (stop_) break;
     if (free <= 0) continue;
-    grpc::ClientContext ctx;
-    prepareContext(ctx, opt_.coordinator, std::chrono::seconds(10));
-    v1::LeaseRequest req;
-    req.set_format_version(wire::kFormatVersion);
-    req.set_worker_id(id);
-    req.set_max_tasks(free);
-    v1::LeaseResponse resp;
-    grpc::Status s = stub_->LeaseWork(&ctx, req, &resp);
-    if (!s.ok()) {
-      if (s.error_code() == grpc::FAILED_PRECONDITION) {
+    LeaseBatch batch;
+    try {
+      batch = client_.lease(id, free);
+    } catch (const RpcError& e) {
+      if (e.code() == grpc::FAILED_PRECONDITION) {
         reregister_ = true;  // the coordinator restarted and forgot us
         continue;
       }
-      if (!transient(s.error_code())) {
-        spdlog::error("worker={} event=lease_failed status={} message=\"{}\"", id, statusCodeName(s.error_code()),
-                      s.error_message());
+      if (!isTransient(e.code())) {
+        spdlog::error("worker={} event=lease_failed status={} message=\"{}\"", id, statusCodeName(e.code()),
+                      e.message());
         stop_ = true;
         break;
       }
-      spdlog::warn("worker={} event=coordinator_unavailable attempt={} message=\"{}\"", id, attempt, s.error_message());
+      spdlog::warn("worker={} event=coordinator_unavailable attempt={} message=\"{}\"", id, attempt, e.message());
       backoff(attempt);
       continue;
     }
     attempt = 0;
-    for (const auto& pl : resp.leases()) {
+    for (Lease& lease : batch.leases) {
       auto a = std::make_unique<Active>();
-      a->lease = fromProto(pl);
+      a->lease = std::move(lease);
       Active* raw = a.get();
       std::lock_guard lock(mu_);
       active_.push_back(std::move(a));
       raw->thread = std::thread([this, raw] { runTask(raw); });
     }
-    if (resp.leases().empty()) {
-      const double wait = std::clamp(resp.retry_after_seconds(), 0.02, 5.0);
+    if (batch.leases.empty()) {
+      const double wait = std::clamp(batch.retryAfterSeconds, 0.02, 5.0);
       for (double slept = 0; slept < wait && !stop_; slept += 0.02)
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
@@ -328,15 +282,13 @@ int Worker::run() {
       }
   }
   if (!returned.empty()) {
-    grpc::ClientContext ctx;
-    prepareContext(ctx, opt_.coordinator, std::chrono::seconds(5));
-    v1::ReturnLeaseRequest req;
-    req.set_format_version(wire::kFormatVersion);
-    req.set_worker_id(workerId_);
-    for (auto& l : returned) req.add_lease_ids(l);
-    v1::ReturnLeaseResponse resp;
-    grpc::Status s = stub_->ReturnLeases(&ctx, req, &resp);
-    spdlog::info("worker={} event=leases_returned count={} ok={}", workerId_, returned.size(), s.ok());
+    bool ok = true;
+    try {
+      client_.returnLeases(workerId_, returned);
+    } catch (const RpcError&) {
+      ok = false;  // they expire on the coordinator instead
+    }
+    spdlog::info("worker={} event=leases_returned count={} ok={}", workerId_, returned.size(), ok);
   }
   for (auto& a : active_)
     if (a->thread.joinable()) a->thread.join();

@@ -5,6 +5,8 @@
 // after a coordinator restart. stop() (SIGTERM) stops leasing, abandons unfinished tasks between work
 // units and returns their leases so other workers pick them up at once.
 #pragma once
+#include <tbb/task_arena.h>
+
 #include <atomic>
 #include <condition_variable>
 #include <map>
@@ -14,11 +16,11 @@
 #include <thread>
 #include <vector>
 
+#include "common/farm/farm_types.h"
+#include "common/farm/scene_cache.h"
 #include "common/methods/registry.h"
 #include "common/render/render_scene.h"
-#include "coordinator/client.h"
-#include "coordinator/farm_types.h"
-#include "proto/mltfarm.grpc.pb.h"
+#include "worker/coordinator_client.h"
 
 namespace mlt::farm {
 
@@ -47,33 +49,27 @@ class Worker {
     std::atomic<bool> finished{false};
     std::thread thread;
   };
-  struct SceneEntry {
-    std::mutex mu;
-    std::shared_ptr<const RenderScene> scene;
-  };
-
   bool registerWithBackoff();
   void heartbeatLoop();
   void runTask(Active* a);
   std::shared_ptr<const JobPlan> planFor(const std::string& jobId);
-  std::shared_ptr<const RenderScene> sceneFor(const Lease& l, const JobPlan& plan);
   void reportFailure(const Lease& l, const std::string& workerId, const std::string& message);
   void reapFinished();
   void releaseSlot(Active* a);  // the task no longer computes: its slot may take the next lease
   void backoff(int& attempt);
 
   WorkerOptions opt_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::WorkerService::Stub> stub_;
+  CoordinatorClient client_;
+  SceneCache scenes_;  // bundles by hash on disk, built render scenes in memory
   std::atomic<bool> stop_{false};
   std::atomic<bool> reregister_{false};
-  std::mutex mu_;  // guards workerId_, active_, plans_, scenes_
+  std::mutex mu_;  // guards workerId_, active_, plans_
   std::condition_variable slotFreed_;  // a task stopped computing or finished: lease the next one now
   std::string workerId_;
   double heartbeatSeconds_ = 1;
   std::vector<std::unique_ptr<Active>> active_;
   std::map<std::string, std::shared_ptr<const JobPlan>> plans_;
-  std::map<std::string, std::shared_ptr<SceneEntry>> scenes_;  // key: hash + film size
+  std::unique_ptr<tbb::task_arena> arena_;  // every task's units run here: at most `threads` at once
 };
 
 }  // namespace mlt::farm

@@ -132,7 +132,7 @@ std::vector<Color> developImage(const JobPlan& plan, const PartialResult& merged
 }
 
 bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
-              const std::atomic<bool>* cancel) {
+              const std::atomic<bool>* cancel, size_t parallelism) {
   if (begin > end || end > plan.units.size())
     throw std::invalid_argument("runUnits: units [" + std::to_string(begin) + ", " + std::to_string(end) +
                                 ") outside the plan's " + std::to_string(plan.units.size()));
@@ -141,6 +141,7 @@ bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uin
   e.issue = [&](size_t i) { return begin + i < end && !(cancel && cancel->load()); };
   e.run = [&](size_t i) { return runWorkUnit(scene, plan, plan.units[begin + i]); };
   e.merge = [&](size_t, PartialResult& r) { out.add(r); };
+  e.parallelism = parallelism;
   return executeUnits(e) == size_t(end - begin);
 }
 

@@ -36,9 +36,9 @@ PartialResult runWorkUnit(const RenderScene& scene, const JobPlan& plan, const W
 // Linear RGB, row-major from the top-left. All normalization happens here.
 std::vector<Color> developImage(const JobPlan& plan, const PartialResult& merged);
 
-// Units [begin, end) of `plan`, one after another, summed in index order into a zero partial of the
+// Units [begin, end) of `plan`, up to `parallelism` at a time, summed in index order into a zero partial of the
 // plan's film size (executor.h). Returns false (result incomplete) if `cancel` became true between units.
 bool runUnits(const RenderScene& scene, const JobPlan& plan, uint32_t begin, uint32_t end, PartialResult& out,
-              const std::atomic<bool>* cancel = nullptr);
+              const std::atomic<bool>* cancel = nullptr, size_t parallelism = 1);
 
 }  // namespace mlt

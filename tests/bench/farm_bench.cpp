@@ -15,7 +15,7 @@
 #include "common/render/render_scene.h"
 #include "coordinator/embedded.h"
 #include "coordinator/merge.h"
-#include "coordinator/scene_loading.h"
+#include "common/farm/scene_loading.h"
 #include "coordinator/service.h"
 #include "proto/convert.h"
 #include "worker/uploader.h"

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <thread>
 
 #include "common/io/exr_io.h"
 #include "common/io/png_io.h"
@@ -29,7 +30,11 @@ void renderWithLocalFarm(const LocalRenderOptions& o, int workers) {
   e.settings.hasRrDepth = o.rrDepth.has_value();
   e.settings.hasSpp = o.sppGiven;
   e.settings.defines = o.defines;  // applied by the coordinator and every worker
-  e.workers = workers;
+  // One worker process running every thread by default: its tasks share the threads unit by unit, so
+  // the job's last task does not leave a core idle (with one single-threaded process per core it would).
+  const int threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  e.workers = workers > 0 ? workers : 1;
+  e.threadsPerWorker = std::max(1, threads / e.workers);
   e.outExr = o.outExr;
   const std::string png = o.outPng.empty() ? pngPathFor(o.outExr) : o.outPng;
   std::unique_ptr<ProgressBar> bar;

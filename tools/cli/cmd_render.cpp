@@ -59,7 +59,7 @@ CommandRun setupRender(CLI::App& sub) {
                "Render in this process instead of the local farm (a coordinator and worker processes on "
                "loopback, the default). --time and --technique-images always render in-process");
   sub.add_option("-w,--workers", o->workers,
-                 "Local farm: worker processes (default: --threads, else every core)")
+                 "Local farm: worker processes, sharing --threads (default: one worker process with every thread)")
       ->check(CLI::NonNegativeNumber);
   sub.add_flag("--technique-images", o->techniqueImages,
                "bdpt: also write OUT_s<s>_t<t>.exr/.png, one image per technique (s light vertices, t camera "
@@ -83,7 +83,7 @@ CommandRun setupRender(CLI::App& sub) {
     lo.showProgress = !o->quiet;
     lo.techniqueImages = o->techniqueImages;
     if (!o->inProcess && o->time == 0 && !lo.techniqueImages)
-      renderWithLocalFarmAndReport(lo, o->workers > 0 ? o->workers : o->threads);
+      renderWithLocalFarmAndReport(lo, o->workers);
     else
       renderLocal(lo);
     return 0;

@@ -1,6 +1,6 @@
-// Domain types of the farm protocol (no protobuf): what the coordinator's handlers speak. The gRPC
-// services translate them in coordinator/convert.cpp; the render job values themselves go through
-// proto/convert.h.
+// Domain types of the farm protocol (no protobuf): what the coordinator's handlers and the worker's
+// client (worker/coordinator_client.h) speak. proto/farm_convert.cpp translates them to the wire; the
+// render job values themselves go through proto/convert.h.
 #pragma once
 #include <cstdint>
 #include <map>
@@ -9,11 +9,6 @@
 #include <vector>
 
 #include "common/methods/registry.h"
-
-namespace mltfarm::v1 {}  // the wire's protobuf package (proto/mltfarm.proto)
-namespace mlt {
-namespace v1 = ::mltfarm::v1;
-}  // namespace mlt
 
 namespace mlt::farm {
 

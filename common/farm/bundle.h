@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
 
 namespace mlt::farm {
 

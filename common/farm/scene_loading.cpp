@@ -1,8 +1,8 @@
 // Scene loading shared by coordinator and worker (see scene_loading.h).
-#include "coordinator/scene_loading.h"
+#include "common/farm/scene_loading.h"
 
 #include "common/scene/mitsuba_loader.h"
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
 
 namespace mlt::farm {
 

@@ -1,5 +1,5 @@
 // Farm protocol conversion (see convert.h).
-#include "coordinator/convert.h"
+#include "proto/farm_convert.h"
 
 namespace mlt::farm {
 

@@ -1,7 +1,5 @@
 // Scene bundles (see bundle.h).
-#include "coordinator/bundle.h"
-
-#include <openssl/evp.h>
+#include "common/farm/bundle.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -9,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/core/sha256.h"
 #include "common/scene/mitsuba_loader.h"
 
 namespace fs = std::filesystem;
@@ -76,22 +75,15 @@ std::string bundleHash(const std::vector<BundleFile>& files) {
   std::vector<const BundleFile*> sorted;
   for (const auto& f : files) sorted.push_back(&f);
   std::sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->path < b->path; });
-  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
-  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  Sha256 sha;  // common/core: the same digest as sceneContentHash, with no crypto library below the farm
   for (const BundleFile* f : sorted) {
     // Same scheme as common/scene/scene_hash.h: path, '\0', 8-byte big-endian size, bytes.
     std::string head = f->path + '\0';
     for (int b = 7; b >= 0; --b) head += char((uint64_t(f->data.size()) >> (8 * b)) & 0xff);
-    EVP_DigestUpdate(ctx, head.data(), head.size());
-    EVP_DigestUpdate(ctx, f->data.data(), f->data.size());
+    sha.update(head);
+    sha.update(f->data);
   }
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx, digest, &len);
-  EVP_MD_CTX_free(ctx);
-  std::string hex;
-  for (unsigned i = 0; i < len; ++i) hex += fmt::format("{:02x}", digest[i]);
-  return hex;
+  return sha.hexDigest();
 }
 
 void writeBundle(const std::string& dir, const std::vector<BundleFile>& files) {

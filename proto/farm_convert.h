@@ -1,7 +1,7 @@
 // Farm protocol types <-> wire (the coordinator/worker boundary's conversion file; render job values
 // go through proto/convert.h). Validation errors are wire::WireError naming the field.
 #pragma once
-#include "coordinator/farm_types.h"
+#include "common/farm/farm_types.h"
 #include "proto/convert.h"
 #include "proto/mltfarm.pb.h"
 

@@ -1,0 +1,164 @@
+// The coordinator's ClientHandler (see handler.h): submit (bundle, scene validation, record), status,
+// watch, cancel, list and the finished image's path.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fmt/format.h>
+#include <thread>
+
+#include "common/farm/bundle.h"
+#include "common/farm/scene_loading.h"
+#include "common/job/mlt_job.h"
+#include "coordinator/coordinator.h"
+#include "proto/convert.h"
+
+namespace fs = std::filesystem;
+
+namespace mlt::farm {
+namespace {
+
+using Code = FarmError::Code;
+
+double unixNow() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+constexpr double kMaxTotalWork = 1e12;  // mutations or pixel samples per job
+
+}  // namespace
+
+JobStatus Coordinator::submit(SubmitRequest req) {
+  // 1. The bundle: uploaded files, or collected from a path this process can read.
+  SceneBundle bundle;
+  if (!req.coordinatorPath.empty()) {
+    bundle = collectBundle(req.coordinatorPath, req.defines);
+  } else {
+    if (req.bundle.empty()) throw FarmError(Code::InvalidArgument, "bundle: no scene files uploaded and no coordinator_path");
+    for (const BundleFile& f : req.bundle) validateBundlePath(f.path);
+    validateBundlePath(req.bundleSceneFile);
+    if (std::none_of(req.bundle.begin(), req.bundle.end(), [&](auto& f) { return f.path == req.bundleSceneFile; }))
+      throw FarmError(Code::InvalidArgument,
+                      fmt::format("bundle_scene_file: '{}' is not in the uploaded bundle", req.bundleSceneFile));
+    bundle.files = std::move(req.bundle);
+    bundle.sceneFile = req.bundleSceneFile;
+  }
+  const std::string hash = bundleHash(bundle.files);
+  if (!req.bundleHash.empty() && req.bundleHash != hash)
+    throw FarmError(Code::InvalidArgument,
+                    fmt::format("bundle_hash: client says {}, the uploaded files hash to {}", req.bundleHash, hash));
+  const std::string dir = sceneDir(hash);
+  if (!fs::exists(dir)) {
+    std::string tmp = dir + ".tmp-" + instance_ + fmt::format("-{}", std::hash<std::thread::id>()(std::this_thread::get_id()));
+    fs::remove_all(tmp);
+    writeBundle(tmp, bundle.files);
+    std::error_code ec;
+    fs::rename(tmp, dir, ec);  // another submit of the same bundle may have won: same bytes
+    if (ec) fs::remove_all(tmp);
+  }
+  // 2. Load and validate the scene exactly as the workers will.
+  SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string(), req.defines);
+  RenderSettings s = req.settings;
+  resolveSettings(s, req.hasSize, req.hasMaxDepth, req.hasRrDepth, req.hasSpp, desc);
+  const double pixels = double(s.width) * s.height;
+  if (isMarkovChainMethod(s.method) && s.mutationsPerPixel * pixels > kMaxTotalWork)
+    throw FarmError(Code::InvalidArgument,
+                    fmt::format("settings.mutations_per_pixel: {} x {} pixels = {:.3g} mutations exceeds the limit {:.0e}",
+                                s.mutationsPerPixel, pixels, s.mutationsPerPixel * pixels, kMaxTotalWork));
+  if (!isMarkovChainMethod(s.method) && double(s.spp) * pixels > kMaxTotalWork)
+    throw FarmError(Code::InvalidArgument, fmt::format("settings.spp: {} x {} pixels exceeds the limit {:.0e}", s.spp,
+                                                       pixels, kMaxTotalWork));
+  try {
+    findMethod(s.method).validate(s);  // e.g. mmlt with the scene's unlimited depth: refused now, not at planning
+  } catch (const std::invalid_argument& e) {
+    throw FarmError(Code::InvalidArgument, e.what());
+  }
+  buildRenderScene(desc, s.width, s.height);  // throws InvalidArgument naming the element
+
+  // 3. Record it.
+  std::lock_guard lock(mu_);
+  JobRecord rec;
+  rec.name = req.name;
+  rec.priority = req.priority;
+  rec.state = int(JobState::Queued);
+  rec.settings = wire::toProto(wire::SubmittedSettings{s, true, true, true, true, req.defines}).SerializeAsString();
+  rec.sceneHash = hash;
+  rec.sceneFile = bundle.sceneFile;
+  rec.submittedAt = unixNow();
+  rec.id = store_->insertJob(rec);
+  Job job;
+  job.rec = rec;
+  job.status.jobId = formatJobId(rec.id);
+  job.status.name = rec.name;
+  job.status.priority = rec.priority;
+  job.status.method = s.method;
+  job.status.sceneHash = hash;
+  job.status.width = s.width;
+  job.status.height = s.height;
+  job.defines = req.defines;
+  Job& j = jobs_.emplace(rec.id, std::move(job)).first->second;
+  refreshProgress(j);
+  spdlog::info("job={} event=submitted scene_hash={} scene={} method={} size={}x{} seed={} priority={}", j.status.jobId,
+               hash.substr(0, 12), bundle.sceneFile, j.status.method, s.width, s.height, s.seed, rec.priority);
+  touch(j);
+  work_.notify_all();
+  JobStatus out = j.status;
+  out.elapsedSeconds = 0;
+  return out;
+}
+
+JobStatus Coordinator::get(const std::string& jobId) {
+  std::lock_guard lock(mu_);
+  Job& job = findJob(jobId);
+  refreshProgress(job);
+  JobStatus out = job.status;
+  out.elapsedSeconds = unixNow() - job.rec.submittedAt;
+  return out;
+}
+
+JobStatus Coordinator::waitForChange(const std::string& jobId, uint64_t afterVersion, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mu_);
+  Job* job = &findJob(jobId);
+  changed_.wait_for(lock, timeout, [&] { return stopping_ || job->status.version > afterVersion; });
+  refreshProgress(*job);
+  JobStatus out = job->status;
+  out.elapsedSeconds = unixNow() - job->rec.submittedAt;
+  return out;
+}
+
+JobStatus Coordinator::cancel(const std::string& jobId) {
+  std::lock_guard lock(mu_);
+  Job& job = findJob(jobId);
+  if (isTerminal(job.status.state))
+    throw FarmError(Code::FailedPrecondition,
+                    fmt::format("job {} is already {}", jobId, jobStateName(job.status.state)));
+  job.pending.clear();
+  setState(job, JobState::Cancelled);
+  return job.status;
+}
+
+std::vector<JobStatus> Coordinator::list() {
+  std::lock_guard lock(mu_);
+  std::vector<JobStatus> out;
+  for (auto& [id, job] : jobs_) {
+    refreshProgress(job);
+    out.push_back(job.status);
+    out.back().elapsedSeconds = unixNow() - job.rec.submittedAt;
+  }
+  return out;
+}
+
+std::string Coordinator::resultPath(const std::string& jobId, const std::string& format) {
+  std::lock_guard lock(mu_);
+  Job& job = findJob(jobId);
+  if (format != "exr" && format != "png")
+    throw FarmError(Code::InvalidArgument, fmt::format("format: '{}' (exr|png)", format));
+  if (job.status.state != JobState::Done)
+    throw FarmError(Code::FailedPrecondition,
+                    fmt::format("job {} is {}: no result{}", jobId, jobStateName(job.status.state),
+                                job.status.error.empty() ? "" : " (" + job.status.error + ")"));
+  return (fs::path(jobDir(job.rec.id)) / ("image." + format)).string();
+}
+
+}  // namespace mlt::farm

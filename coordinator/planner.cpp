@@ -1,0 +1,85 @@
+// The planner thread: bootstraps queued jobs (highest priority first) and hands finished ones to the
+// merge (merge_job.cpp), one at a time, outside the lock.
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+
+#include "common/farm/scene_loading.h"
+#include "coordinator/coordinator.h"
+#include "proto/convert.h"
+
+namespace fs = std::filesystem;
+
+namespace mlt::farm {
+
+void Coordinator::plannerLoop() {
+  std::unique_lock lock(mu_);
+  while (!stopping_) {
+    int64_t toMerge = -1, toPlan = -1;
+    int bestPriority = 0;
+    for (auto& [id, job] : jobs_) {
+      if (job.status.state == JobState::Merging && toMerge < 0) toMerge = id;
+      if (job.status.state == JobState::Queued && (toPlan < 0 || job.status.priority > bestPriority)) {
+        toPlan = id;
+        bestPriority = job.status.priority;
+      }
+    }
+    if (toMerge >= 0) {
+      lock.unlock();
+      merge(toMerge);
+      lock.lock();
+    } else if (toPlan >= 0) {
+      lock.unlock();
+      planOne(toPlan);
+      lock.lock();
+    } else {
+      work_.wait(lock);
+    }
+  }
+}
+
+void Coordinator::planOne(int64_t id) {
+  std::string file, jobId;
+  RenderSettings settings;
+  std::map<std::string, std::string> defines;
+  {
+    std::lock_guard lock(mu_);
+    Job& job = jobs_.at(id);
+    if (job.status.state != JobState::Queued) return;
+    setState(job, JobState::Planning);
+    file = (fs::path(sceneDir(job.rec.sceneHash)) / job.rec.sceneFile).string();
+    v1::RenderSettings ps;
+    ps.ParseFromString(job.rec.settings);
+    settings = wire::fromProto(ps).settings;
+    defines = job.defines;
+    jobId = job.status.jobId;
+  }
+  std::shared_ptr<JobPlan> plan;
+  std::string error;
+  try {
+    auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
+    spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
+                 settings.bootstrapSamples);
+    plan = std::make_shared<JobPlan>(planJob(*scene, settings));
+    spdlog::info("job={} event=bootstrap_done b={} b_stderr={} units={} seconds={:.3f}", jobId, plan->norm.b,
+                 plan->norm.bStdErr, plan->units.size(), plan->norm.bootstrapSeconds);
+    if (plan->units.empty()) error = "the plan has no work units";
+    wire::parseJobPlan(wire::jobPlanBytes(*plan));  // the plan must survive the wire
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  std::lock_guard lock(mu_);
+  Job& job = jobs_.at(id);
+  if (job.status.state != JobState::Planning) return;  // cancelled meanwhile
+  if (!error.empty()) {
+    setState(job, JobState::Failed, "bootstrap: " + error);
+    return;
+  }
+  job.plan = plan;
+  store_->setPlan(id, wire::jobPlanBytes(*plan), uint32_t(splitTasks(*plan).size()), int(JobState::Running));
+  job.status.state = JobState::Running;
+  startRunning(job);
+  touch(job);
+}
+
+}  // namespace mlt::farm

@@ -1,0 +1,38 @@
+// Accepted task results, one file each: STATE/jobs/job-<id>/results/task-NNNNNN.part (the partial
+// result as proto/convert.h serializePartial writes it, zero runs left out, plus a checksum). A file is
+// written under a temporary name and renamed, so it exists whole or not at all, and it is written before
+// the upload is acknowledged, so a coordinator killed at any point loses nothing it accepted. No fsync
+// (as SQLite's synchronous=NORMAL did not sync each commit either): a power loss may lose or tear the
+// latest files; a torn file fails its checksum on reload and its task is rendered again.
+//
+// Why not the SQLite database any more: a task's film is megabytes, and the database wrote each one
+// twice (WAL, then checkpoint, with an fsync per checkpoint) and read it back for the merge; the
+// coordinator now merges results in memory as they arrive and reads these files only after a restart.
+// Thread-safe: each call touches its own file.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/job/job_types.h"
+
+namespace mlt::farm {
+
+class ResultStore {
+ public:
+  explicit ResultStore(std::string jobsDir);  // STATE/jobs
+
+  // Writes (job, task)'s result. A task's result is a pure function of the plan, so a second write of
+  // the same task (a duplicate upload racing the first) writes the same bytes. Throws std::runtime_error.
+  void put(int64_t job, uint32_t task, const PartialResult& result) const;
+  std::vector<uint32_t> stored(int64_t job) const;  // ascending
+  // nullopt if the file is missing, torn or does not parse (the caller renders the task again).
+  std::optional<PartialResult> load(int64_t job, uint32_t task, std::string* why = nullptr) const;
+
+ private:
+  std::string path(int64_t job, uint32_t task) const;
+  std::string dir_;
+};
+
+}  // namespace mlt::farm

@@ -1,0 +1,163 @@
+// The pieces of the farm layer that keep the farm cheap without changing a bit: the zero-run film
+// encoding of uploads (exact, and smaller for the sparse films tasks produce), the coordinator's result
+// files (exact round trip; a torn file is refused, never half-read) and the task split (small films keep
+// 64 tasks, a 256x256 Markov chain job gets fewer, each task a contiguous range covering every unit).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "common/farm/tasks.h"
+#include "coordinator/result_store.h"
+#include "proto/convert.h"
+#include "proto/sparse_film.h"
+
+namespace mlt::farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A film with a fraction `density` of nonzero words in every buffer (including a zero splat layer 0
+// next to a used layer 3, as an mmlt task has), values of all magnitudes and signs, and a -0.0.
+Film randomFilm(int w, int h, double density, uint32_t seed) {
+  Film f(w, h);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto value = [&] { return u(rng) < density ? std::ldexp(u(rng) - 0.5, int(rng() % 60) - 30) : 0.0; };
+  for (auto& p : f.pixelSums()) p = RGBd{value(), value(), value()};
+  for (auto& c : f.pixelCounts()) c = value();
+  for (auto& p : f.splatLayer(3)) p = RGBd{value(), value(), value()};
+  f.pixelCounts()[0] = -0.0;  // not a zero word (its sign bit is set): it must come back as -0.0
+  f.setNonFiniteSamples(7);
+  return f;
+}
+
+bool sameBits(const Film& a, const Film& b) {
+  if (a.width() != b.width() || a.height() != b.height() || a.splatLayers() != b.splatLayers() ||
+      a.nonFiniteSamples() != b.nonFiniteSamples())
+    return false;
+  auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+  };
+  if (!same(a.pixelSums(), b.pixelSums()) || !same(a.pixelCounts(), b.pixelCounts())) return false;
+  for (uint32_t l : a.splatLayers())
+    if (!same(a.splatLayer(l), b.splatLayer(l))) return false;
+  return true;
+}
+
+TEST(FarmLayer, ZeroRunFilmsRoundTripBitExactly) {
+  for (double density : {0.0, 0.001, 0.3, 0.9, 1.0}) {
+    const Film f = randomFilm(37, 23, density, uint32_t(density * 1000) + 1);
+    const std::string bytes = wire::encodeFilmZeroRuns(f);
+    EXPECT_LE(bytes.size(), wire::maxZeroRunsBytes(37, 23, f.splatLayers().size())) << density;
+    const Film g = wire::decodeFilmZeroRuns(37, 23, bytes, 7, f.splatLayers());
+    EXPECT_TRUE(sameBits(f, g)) << "density " << density;
+    if (density <= 0.3) EXPECT_LT(bytes.size(), wire::encodeFilm(f).size() / 2) << density;
+  }
+}
+
+TEST(FarmLayer, MalformedZeroRunStreamsAreRefused) {
+  const Film f = randomFilm(8, 8, 0.5, 3);
+  const std::string good = wire::encodeFilmZeroRuns(f);
+  const std::vector<uint32_t> layers = f.splatLayers();
+  EXPECT_THROW(wire::decodeFilmZeroRuns(8, 8, good.substr(0, good.size() - 3), 0, layers), wire::WireError);
+  EXPECT_THROW(wire::decodeFilmZeroRuns(8, 8, good + good, 0, layers), wire::WireError);
+  EXPECT_THROW(wire::decodeFilmZeroRuns(8, 8, std::string("\x01\x00", 2), 0, layers), wire::WireError);  // too short
+  EXPECT_THROW(wire::decodeFilmZeroRuns(9, 8, good, 0, layers), wire::WireError);  // another film size
+}
+
+PartialResult somePartial() {
+  PartialResult r;
+  r.film = randomFilm(16, 12, 0.2, 11);
+  r.samples = 12345;
+  r.units = {4, 5, 6};
+  r.seconds = 1.5;
+  r.stats.proposedPerKind = {10, 20};
+  r.stats.acceptedPerKind = {3, 9};
+  return r;
+}
+
+TEST(FarmLayer, ResultFilesRoundTripAndTornFilesAreRefused) {
+  const fs::path dir = fs::temp_directory_path() / ("mltfarm-results-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  ResultStore store(dir.string());
+  const PartialResult r = somePartial();
+  store.put(3, 7, r);
+  store.put(3, 2, r);
+  store.put(3, 2, r);  // a duplicate upload writes the same bytes again
+  EXPECT_EQ(store.stored(3), (std::vector<uint32_t>{2, 7}));
+  EXPECT_TRUE(store.stored(4).empty());
+  std::optional<PartialResult> back = store.load(3, 7);
+  ASSERT_TRUE(back);
+  EXPECT_TRUE(sameBits(back->film, r.film));
+  EXPECT_EQ(back->samples, r.samples);
+  EXPECT_EQ(back->units, r.units);
+  EXPECT_EQ(back->stats.acceptedPerKind, r.stats.acceptedPerKind);
+  std::string why;
+  EXPECT_FALSE(store.load(3, 5, &why));
+  EXPECT_EQ(why, "missing");
+  // A power loss may leave a renamed file with zeroed pages: it must not parse as a result.
+  const fs::path file = dir / "job-3" / "results" / "task-000007.part";
+  const auto size = fs::file_size(file);
+  {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(size / 2));
+    const std::string zeros(64, '\0');
+    f.write(zeros.data(), std::streamsize(zeros.size()));
+  }
+  EXPECT_FALSE(store.load(3, 7, &why));
+  EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+  fs::resize_file(dir / "job-3" / "results" / "task-000002.part", size / 3);
+  EXPECT_FALSE(store.load(3, 2, &why));
+  fs::remove_all(dir);
+}
+
+JobPlan chainPlan(int width, int height, uint32_t chains, uint64_t mutationsPerChain) {
+  JobPlan plan;
+  plan.settings.method = "mmlt";
+  plan.settings.width = width;
+  plan.settings.height = height;
+  for (uint32_t i = 0; i < chains; ++i) {
+    WorkUnit u;
+    u.index = i;
+    u.mutations = mutationsPerChain;
+    plan.units.push_back(u);
+  }
+  return plan;
+}
+
+void expectContiguous(const std::vector<TaskRange>& tasks, uint32_t units) {
+  ASSERT_FALSE(tasks.empty());
+  EXPECT_EQ(tasks.front().begin, 0u);
+  EXPECT_EQ(tasks.back().end, units);
+  for (size_t t = 0; t < tasks.size(); ++t) {
+    EXPECT_LT(tasks[t].begin, tasks[t].end);
+    if (t > 0) {
+      EXPECT_EQ(tasks[t].begin, tasks[t - 1].end);
+    }
+  }
+}
+
+TEST(FarmLayer, TasksAreBoundedByTheirFilmTraffic) {
+  // The tests' jobs: 32x32 films cost nothing to move, 96 units make 64 tasks.
+  const JobPlan tiny = chainPlan(32, 32, 96, 8 * 1024 / 96);
+  expectContiguous(splitTasks(tiny), 96);
+  EXPECT_EQ(splitTasks(tiny).size(), 64u);
+  // The README's default job: 256x256, 1024 chains, 256 mutations per pixel. 64 tasks would move 64 films
+  // of 3.7 MB; the traffic bound allows max(64 MiB, 4 B x 16.8 M mutations) = 67 MB, i.e. 18 films.
+  const JobPlan def = chainPlan(256, 256, 1024, 256 * 256 * 256 / 1024);
+  expectContiguous(splitTasks(def), 1024);
+  EXPECT_EQ(splitTasks(def).size(), 18u);
+  // Four times the work: four times the films (still at most 64).
+  const JobPlan longer = chainPlan(256, 256, 1024, 4 * 256 * 256 * 256 / 1024);
+  EXPECT_EQ(splitTasks(longer).size(), 64u);
+  // Never fewer than min(units, 4), whatever the film.
+  EXPECT_EQ(splitTasks(chainPlan(1920, 1080, 100, 10)).size(), 4u);
+  EXPECT_EQ(splitTasks(chainPlan(1920, 1080, 3, 10)).size(), 3u);
+}
+
+}  // namespace
+}  // namespace mlt::farm
