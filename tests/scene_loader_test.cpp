@@ -262,7 +262,7 @@ TEST(MitsubaLoader, Mitsuba06Spellings) {
   EXPECT_FLOAT_EQ(s.bsdfs[1].extIOR, 1.000277f);
   EXPECT_EQ(s.bsdfs[2].type, BsdfDesc::Type::RoughPlastic);
   expectColor(s.bsdfs[2].reflectance.value, {0.1f, 0.2f, 0.3f});
-  expectColor(s.bsdfs[2].specularReflectance, Color(0.9f));
+  expectColor(s.bsdfs[2].specularReflectance.value, Color(0.9f));
   EXPECT_FLOAT_EQ(s.bsdfs[2].alpha, 0.3f);
   EXPECT_TRUE(s.bsdfs[2].nonlinear);
   EXPECT_EQ(s.bsdfs[2].distribution, MicrofacetType::Beckmann);

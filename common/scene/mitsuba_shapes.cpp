@@ -96,7 +96,9 @@ void Loader::parseShape(const XmlElement& el) {
       }
     } else if (n->name == "emitter") {
       if (mesh.emission) failAt(*n, "the shape already has an emitter");
-      mesh.emission = parseAreaEmitter(*n);
+      const AreaEmission e = parseAreaEmitter(*n);
+      mesh.emission = e.radiance;
+      mesh.emissionTexture = e.texture;
     } else {
       failAt(*n, "unsupported element inside " + describe(el));
     }
