@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -13,7 +15,10 @@
 #include "common/bsdf/texture.h"
 #include "common/core/rng.h"
 #include "common/emitter/make_light.h"
+#include "common/integrators/evaluators.h"
+#include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
+#include "tests/support/estimates.h"
 
 namespace fs = std::filesystem;
 
@@ -297,6 +302,9 @@ TEST(TexturedParams, TexturedAreaLightEvaluatesAtThePointsUv) {
     const auto le = light->sampleLe(rng.uniform2(), rng.uniform2());
     ASSERT_TRUE(le.has_value());
     EXPECT_EQ(le->L.r, ref.eval({le->ray.o.x, le->ray.o.y}).r);
+    // The sample carries its uv, so L() at the sampled point (bdpt's s = 1 vertex) agrees.
+    EXPECT_EQ(light->L(le->ray.o, le->nLight, le->uv, le->ray.d).r, le->L.r);
+    EXPECT_EQ(light->L(li->pLight, li->nLight, li->uv, -li->wi).r, li->L.r);
   }
 }
 
@@ -317,6 +325,51 @@ TEST(TexturedParams, TexturedAreaLightWithoutUvsUsesBarycentrics) {
     // Points on the diagonal may belong to either triangle; skip them.
     if (std::fabs(p.x - p.y) < 1e-4f) continue;
     EXPECT_EQ(le->L.r, expect) << p.x << " " << p.y;
+  }
+}
+
+// Every technique sees the same textured values: a checkerboard light seen directly (pt: L() at the hit;
+// lt: the (1, 1) strategy, L() at the sampled point) over a floor with a bitmap-free checkerboard
+// reflectance and a rough metal ball with textured specular reflectance and alpha. pt, lt and bdpt agree
+// on the image mean and 3 x 3 tile means within 5 standard errors.
+TEST(TexturedParams, PtLtAndBdptAgreeOnTexturedScene) {
+  TempDir d;
+  const SceneDesc desc = loadBody(d, R"(
+  <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+  <sensor type="perspective"><float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 0.6, 3" target="0, 0.4, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="18"/><integer name="height" value="18"/></film></sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><texture name="reflectance" type="checkerboard"><rgb name="color0" value="0.8"/>
+      <rgb name="color1" value="0.2, 0.3, 0.5"/><transform name="to_uv"><scale x="3" y="3"/></transform></texture></bsdf></shape>
+  <shape type="sphere"><point name="center" x="0.5" y="0.3" z="0.3"/><float name="radius" value="0.3"/>
+    <bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+      <texture name="specular_reflectance" type="checkerboard"><rgb name="color0" value="0.9, 0.7, 0.3"/><rgb name="color1" value="0.5"/>
+        <transform name="to_uv"><scale x="6" y="3"/></transform></texture>
+      <texture name="alpha" type="checkerboard"><rgb name="color0" value="0.05"/><rgb name="color1" value="0.4"/>
+        <transform name="to_uv"><scale x="4" y="2"/></transform></texture></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale x="0.6" y="0.4"/><translate y="0.7" z="-0.8"/></transform>
+    <bsdf type="diffuse"/>
+    <emitter type="area"><texture name="radiance" type="checkerboard"><rgb name="color0" value="8, 6, 4"/>
+      <rgb name="color1" value="1, 1, 2"/><transform name="to_uv"><scale x="2" y="1"/></transform></texture></emitter></shape>
+)");
+  const auto scene = RenderScene::build(desc);
+  IntegratorSettings is;
+  is.maxDepth = 4;
+  is.rrDepth = 5;
+  auto run = [&](const char* m, uint64_t seed, uint64_t n) {
+    const auto ev = makeEvaluator(*scene, m, is);
+    return test::estimateImage(*ev, 18, 18, seed, n, 3, 3);
+  };
+  const test::ImageStats bd = run("bdpt", 1, 18 * 18 * 300);
+  for (const auto& [m, n] : {std::pair<const char*, uint64_t>{"pt", 18 * 18 * 600}, {"lt", 18 * 18 * 1200}}) {
+    const test::ImageStats st = run(m, 2, n);
+    int where = -1;
+    const double z = test::maxZ(st, bd, &where);
+    std::printf("%s vs bdpt: %.5f +- %.5f vs %.5f +- %.5f, max z %.2f\n", m, st.mean[0], st.stdErr[0], bd.mean[0],
+                bd.stdErr[0], z);
+    EXPECT_LT(z, 5.0) << m << " entry " << where << ": " << st.mean[where] << " vs " << bd.mean[where];
+    EXPECT_LT(5 * std::hypot(st.stdErr[0], bd.stdErr[0]), 0.05 * bd.mean[0]) << m;  // it can fail
   }
 }
 

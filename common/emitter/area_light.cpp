@@ -123,6 +123,7 @@ std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const 
   s.wi = wi;
   s.pLight = ps.p;
   s.nLight = ps.ng;
+  s.uv = ps.uv;
   s.pdfA = 1.0f / area_;
   s.pdfW = pdfAToW(s.pdfA, d2, std::fabs(cosLight));  // Veach eq. 8.10
   return s;
@@ -143,6 +144,7 @@ std::optional<LightLeSample> AreaLight::sampleLe(Vec2 uPos, Vec2 uDir) const {
   s.ray.d = normalize(Frame(ps.ng).toWorld(local));
   s.ray.tMin = 1e-4f * std::fmax(1.0f, std::fmax(std::fabs(ps.p.x), std::fmax(std::fabs(ps.p.y), std::fabs(ps.p.z))));
   s.nLight = ps.ng;
+  s.uv = ps.uv;
   s.pdfPos = 1.0f / area_;
   s.pdfDir = pdfDir;
   return s;
