@@ -15,6 +15,7 @@
 #include "common/scene/pbrt_loader.h"
 #include "common/scene/scene_loader.h"
 #include "tests/support/estimates.h"
+#include "tests/support/mlt_stats.h"
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
@@ -414,6 +415,38 @@ TEST(PbrtLoader, SameSceneInBothFormatsRendersTheSame) {
                       << b.mean[where] << " +- " << b.stdErr[where];
     // The comparison can fail: the error bars resolve 10% of the image mean (as tests/bundled_scenes_test).
     EXPECT_LT(5 * std::hypot(a.stdErr[0], b.stdErr[0]), 0.10 * a.mean[0]) << m;
+  }
+}
+
+// The Markov chain methods (every registered one besides the sample-based pt/lt/bdpt above) on the pbrt
+// twin agree with bdpt on the Mitsuba twin: image mean and 3 x 3 tile means of 12 independent job seeds
+// (bootstrap included) within 5 combined standard errors, as tests/mlt_bundled_test.cpp does.
+TEST(PbrtLoader, MarkovChainMethodsOnThePbrtTwinAgreeWithTheMitsubaTwin) {
+  TempDir d;
+  const SceneDesc xml = loadScene(d.write("twin.xml", kMitsubaTwin));
+  const SceneDesc pbrt = loadScene(d.write("twin.pbrt", kPbrtTwin));
+  const auto sx = RenderScene::build(xml), sp = RenderScene::build(pbrt);
+  IntegratorSettings is;
+  is.maxDepth = *xml.maxDepth;
+  is.rrDepth = 5;
+  const auto bdpt = makeEvaluator(*sx, "bdpt", is);
+  const test::ImageStats ref = test::estimateImage(*bdpt, 24, 24, 777, 24 * 24 * 1024, 3, 3);
+  for (const std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt"}) {
+    RenderSettings s;
+    s.method = m;
+    s.width = s.height = 24;
+    s.integrator = is;
+    s.mutationsPerPixel = m == "pssmlt-bdpt" ? 16 : 32;
+    s.bootstrapSamples = 40000;
+    s.chains = 16;
+    const test::ImageStats st = test::markovChainStats(*sp, s, 24, 24, 12, 3);
+    int where = 0;
+    const double z = test::maxZ(st, ref, &where);
+    std::printf("%-12s pbrt twin %.5f +- %.5f  bdpt on the Mitsuba twin %.5f +- %.5f  max z %.2f\n", m.c_str(),
+                st.mean[0], st.stdErr[0], ref.mean[0], ref.stdErr[0], z);
+    EXPECT_LT(z, 5.0) << m << " entry " << where << ": " << st.mean[where] << " +- " << st.stdErr[where] << " vs "
+                      << ref.mean[where] << " +- " << ref.stdErr[where];
+    EXPECT_LT(5 * std::hypot(st.stdErr[0], ref.stdErr[0]), 0.10 * ref.mean[0]) << m << ": test too weak";
   }
 }
 
