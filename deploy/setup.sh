@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libembree-dev libopenexr-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
-  libtbb-dev libtinyobjloader-dev libstb-dev libsqlite3-dev libpng-dev
+  libtbb-dev libtinyobjloader-dev libstb-dev libsqlite3-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   iproute2 procps

@@ -480,7 +480,7 @@ TEST(DeltaBsdf, ConductorReflectsWithConductorFresnel) {
 TEST(DeltaBsdf, PlasticSpecularChoiceAndWeight) {
   BsdfDesc d = makeDesc(Type::Plastic, "plastic");
   const auto plastic = makeBsdf({}, d);
-  const float dLum = luminance(d.reflectance.value), sLum = luminance(d.specularReflectance);
+  const float dLum = luminance(d.reflectance.value), sLum = luminance(d.specularReflectance.value);
   const float w = sLum / (dLum + sLum);
   for (float c : {0.9f, 0.5f, 0.1f}) {
     const Vec3 wo = dirFromCos(c);

@@ -1,4 +1,4 @@
-// pt, lt and bdpt agree on the bundled scenes themselves (scenes/*.xml, loaded by the Mitsuba front end),
+// pt, lt and bdpt agree on the bundled scenes themselves (scenes/*.xml and *.pbrt, through loadScene),
 // not only on the code-built test scenes: image mean and 3x3 tile means within kZ standard errors
 // (measured from independent batches; tests/support/estimates.h), at a small resolution.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 
 #include "common/integrators/evaluators.h"
 #include "common/render/render_scene.h"
-#include "common/scene/mitsuba_loader.h"
+#include "common/scene/scene_loader.h"
 #include "tests/support/estimates.h"
 
 namespace mlt {
@@ -23,7 +23,7 @@ constexpr double kZ = 5.0;
 constexpr int kRes = 24;
 
 std::unique_ptr<RenderScene> loadBundled(const std::string& name, IntegratorSettings* is) {
-  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + name);
+  SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + name);
   desc.camera.width = desc.camera.height = kRes;  // every bundled scene is square
   is->maxDepth = desc.maxDepth.value_or(5);
   is->rrDepth = desc.rrDepth.value_or(5);
@@ -78,7 +78,12 @@ INSTANTIATE_TEST_SUITE_P(Scenes, BundledScenes,
                                            // Tiny lights of radiance 1/r^2 seen directly: heavy-tailed
                                            // pixel values, so more samples and a 15% resolution.
                                            Case{"glossy-plates.xml", false, 6400000, 0, 2400000, 0.15},
-                                           Case{"caustic-mirror.xml", false, 600000, 0, 200000}),
+                                           Case{"caustic-mirror.xml", false, 600000, 0, 200000},
+                                           // Serialized meshes, a bitmap floor, textured specular
+                                           // reflectance and roughness, a textured area light.
+                                           Case{"textured-serialized.xml", true, 400000, 400000, 150000},
+                                           // The pbrt-v3 scene (glass sphere in view: no lt).
+                                           Case{"checker-spheres.pbrt", false, 400000, 0, 150000}),
                          [](const ::testing::TestParamInfo<Case>& info) {
                            std::string n = info.param.scene;
                            n = n.substr(0, n.find('.'));

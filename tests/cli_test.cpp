@@ -84,6 +84,19 @@ TEST_F(Cli, MalformedSceneNamesFileAndLine) {
   EXPECT_NE(r.output.find("broken.xml:2"), std::string::npos) << r.output;
 }
 
+// A .pbrt scene goes to the pbrt-v3 front end (by extension); its errors name file and line too.
+TEST_F(Cli, RendersPbrtScenesByExtension) {
+  const fs::path out = tempDir() / "checker.exr";
+  const RunResult r = run("render " + kScenes + "checker-spheres.pbrt --method pt --spp 1 --width 16 --height 16 --in-process -o " + out.string());
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out)) << r.output;
+  const fs::path scene = tempDir() / "broken.pbrt";
+  std::ofstream(scene) << "Camera \"perspective\"\nWorldBegin\nShape \"teapot_of_doom\"\n";
+  const RunResult b = run("render " + scene.string() + " --spp 1 --in-process -o " + (tempDir() / "b.exr").string());
+  EXPECT_EQ(b.exitCode, 2) << b.output;
+  EXPECT_NE(b.output.find("broken.pbrt:3"), std::string::npos) << b.output;
+}
+
 TEST_F(Cli, UsageErrorsAreRejected) {
   EXPECT_NE(run("render " + kScenes + "cornell-box.xml --method nonsense -o /tmp/x.exr").exitCode, 0);
   EXPECT_NE(run("render " + kScenes + "cornell-box.xml --spp 0 -o /tmp/x.exr").exitCode, 0);

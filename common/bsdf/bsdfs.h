@@ -17,17 +17,20 @@ std::unique_ptr<Bsdf> makeDiffuse(TexturePtr reflectance);
 // Applies `nested` on both sides by mirroring back-side directions to the front.
 std::unique_ptr<Bsdf> makeTwoSided(std::unique_ptr<Bsdf> nested);
 // Smooth glass; eta = intIOR / extIOR.
-std::unique_ptr<Bsdf> makeDielectric(float eta, Color specularReflectance, Color specularTransmittance);
+// Colour parameters are textures evaluated at the hit's uv (BsdfQuery::uv / albedo's uv), so eval, pdf,
+// sample and every caller see the same value; a constant is a ConstantTexture. `alphaTex` (may be null)
+// replaces the constant alpha with textureAlpha(*alphaTex, uv).
+std::unique_ptr<Bsdf> makeDielectric(float eta, TexturePtr specularReflectance, TexturePtr specularTransmittance);
 // Thin slab of glass (no refraction, multiple internal reflections folded into R and T).
-std::unique_ptr<Bsdf> makeThinDielectric(float eta, Color specularReflectance, Color specularTransmittance);
+std::unique_ptr<Bsdf> makeThinDielectric(float eta, TexturePtr specularReflectance, TexturePtr specularTransmittance);
 // Smooth metal; eta, k relative to the exterior; mirror = F is 1.
-std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, Color specularReflectance);
-std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType dist, float alpha, Color eta, Color k, bool mirror,
-                                         Color specularReflectance);
-std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType dist, float alpha, float eta, Color specularReflectance,
-                                          Color specularTransmittance);
-std::unique_ptr<Bsdf> makePlastic(float eta, TexturePtr diffuse, Color specularReflectance, bool nonlinear);
+std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, TexturePtr specularReflectance);
+std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType dist, float alpha, TexturePtr alphaTex, Color eta, Color k,
+                                         bool mirror, TexturePtr specularReflectance);
+std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType dist, float alpha, TexturePtr alphaTex, float eta,
+                                          TexturePtr specularReflectance, TexturePtr specularTransmittance);
+std::unique_ptr<Bsdf> makePlastic(float eta, TexturePtr diffuse, TexturePtr specularReflectance, bool nonlinear);
 std::unique_ptr<Bsdf> makeRoughPlastic(MicrofacetType dist, float alpha, float eta, TexturePtr diffuse,
-                                       Color specularReflectance, bool nonlinear);
+                                       TexturePtr specularReflectance, bool nonlinear);
 
 }  // namespace mlt

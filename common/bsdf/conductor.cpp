@@ -12,15 +12,15 @@ namespace {
 
 class Conductor final : public Bsdf {
  public:
-  Conductor(Color eta, Color k, bool mirror, Color r) : eta_(eta), k_(k), mirror_(mirror), specR_(r) {}
+  Conductor(Color eta, Color k, bool mirror, TexturePtr r) : eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {}
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }
-  std::optional<BsdfSample> sample(const Vec3& wo, float, Vec2, const BsdfQuery&) const override {
+  std::optional<BsdfSample> sample(const Vec3& wo, float, Vec2, const BsdfQuery& q) const override {
     if (wo.z <= 0) return std::nullopt;
     BsdfSample s;
     s.wi = reflectZ(wo);
-    s.f = specR_ * fresnel(wo.z) / wo.z;
+    s.f = specR_->eval(q.uv) * fresnel(wo.z) / wo.z;
     s.pdfW = s.pdfRevW = 1;
     s.delta = true;
     return s;
@@ -32,19 +32,19 @@ class Conductor final : public Bsdf {
     return BsdfSampleInverse{clampPrimary(gamma.pick), gamma.fill, 1.0f};
   }
   bool isDelta() const override { return true; }
-  Color albedo(const Vec2&) const override { return specR_ * fresnel(1); }
+  Color albedo(const Vec2& uv) const override { return specR_->eval(uv) * fresnel(1); }
 
  private:
   Color fresnel(float c) const { return mirror_ ? Color(1.0f) : fresnelConductor(c, eta_, k_); }
   Color eta_, k_;
   bool mirror_;
-  Color specR_;
+  TexturePtr specR_;  // specular_reflectance, at the hit's uv
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, Color r) {
-  return std::make_unique<Conductor>(eta, k, mirror, r);
+std::unique_ptr<Bsdf> makeConductor(Color eta, Color k, bool mirror, TexturePtr r) {
+  return std::make_unique<Conductor>(eta, k, mirror, std::move(r));
 }
 
 }  // namespace mlt

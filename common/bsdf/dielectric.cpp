@@ -14,7 +14,7 @@ Color colorMax(const Color& a, const Color& b) { return {std::fmax(a.r, b.r), st
 
 class Dielectric final : public Bsdf {
  public:
-  Dielectric(float eta, Color r, Color t) : eta_(eta), specR_(r), specT_(t) {}
+  Dielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {}
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }
@@ -28,7 +28,7 @@ class Dielectric final : public Bsdf {
     if (uc < F) {
       // Throughput weight f |cos| / pdf = specularReflectance.
       s.wi = reflectZ(wo);
-      s.f = specR_ * (F / std::fabs(s.wi.z));
+      s.f = specR_->eval(q.uv) * (F / std::fabs(s.wi.z));
       s.pdfW = s.pdfRevW = F;
       s.eta = 1;
       return s;
@@ -39,7 +39,7 @@ class Dielectric final : public Bsdf {
     // (Veach 1997, eq. 5.12), in Radiance mode only.
     const float etaCross = cosThetaT < 0 ? eta_ : 1 / eta_;
     const float factor = q.mode == TransportMode::Radiance ? 1 / (etaCross * etaCross) : 1.0f;
-    s.f = specT_ * ((1 - F) * factor / std::fabs(cosThetaT));
+    s.f = specT_->eval(q.uv) * ((1 - F) * factor / std::fabs(cosThetaT));
     s.pdfW = 1 - F;
     s.pdfRevW = 1 - fresnelDielectric(s.wi.z, eta_);
     s.eta = etaCross;
@@ -58,15 +58,17 @@ class Dielectric final : public Bsdf {
     return std::nullopt;
   }
   bool isDelta() const override { return true; }
-  Color albedo(const Vec2&) const override { return colorMax(specR_, specT_); }
+  Color albedo(const Vec2& uv) const override { return colorMax(specR_->eval(uv), specT_->eval(uv)); }
 
  private:
   float eta_;
-  Color specR_, specT_;
+  TexturePtr specR_, specT_;  // specular_reflectance / _transmittance, at the hit's uv
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeDielectric(float eta, Color r, Color t) { return std::make_unique<Dielectric>(eta, r, t); }
+std::unique_ptr<Bsdf> makeDielectric(float eta, TexturePtr r, TexturePtr t) {
+  return std::make_unique<Dielectric>(eta, std::move(r), std::move(t));
+}
 
 }  // namespace mlt

@@ -20,6 +20,19 @@ bool nonNegative(const Color& c) { return c.r >= 0 && c.g >= 0 && c.b >= 0 && c.
 void checkColor(const BsdfDesc& d, const Color& c, const char* field) {
   if (!nonNegative(c)) fail(d, std::string(field) + " must be finite and non-negative");
 }
+// A colour parameter: constants are checked here, bitmaps are loaded (their texels are non-negative).
+TexturePtr colorTexture(const BsdfDesc& d, const TextureDesc& t, const char* field) {
+  if (t.isConstant()) checkColor(d, t.value, field);
+  if (t.type == TextureDesc::Type::Checkerboard) {
+    checkColor(d, t.color0, field);
+    checkColor(d, t.color1, field);
+  }
+  return makeTexture(t, d.id);
+}
+TexturePtr alphaTexture(const BsdfDesc& d) {
+  if (!d.alphaTexture) return nullptr;
+  return colorTexture(d, *d.alphaTexture, "alpha");
+}
 
 float relativeIor(const BsdfDesc& d) {
   if (!(d.intIOR > 0) || !std::isfinite(d.intIOR)) fail(d, "intIOR must be positive, got " + std::to_string(d.intIOR));
@@ -54,37 +67,38 @@ std::unique_ptr<Bsdf> build(const SceneDesc& scene, const BsdfDesc& d, int depth
     case T::Dielectric:
     case T::ThinDielectric: {
       const float eta = relativeIor(d);
-      checkColor(d, d.specularReflectance, "specularReflectance");
-      checkColor(d, d.specularTransmittance, "specularTransmittance");
-      return d.type == T::Dielectric ? makeDielectric(eta, d.specularReflectance, d.specularTransmittance)
-                                     : makeThinDielectric(eta, d.specularReflectance, d.specularTransmittance);
+      auto r = colorTexture(d, d.specularReflectance, "specularReflectance");
+      auto t = colorTexture(d, d.specularTransmittance, "specularTransmittance");
+      return d.type == T::Dielectric ? makeDielectric(eta, std::move(r), std::move(t))
+                                     : makeThinDielectric(eta, std::move(r), std::move(t));
     }
     case T::RoughDielectric: {
       const float eta = relativeIor(d);
       if (std::fabs(eta - 1) < 1e-4f) fail(d, "roughdielectric with intIOR == extIOR is not supported (index-matched)");
-      checkColor(d, d.specularReflectance, "specularReflectance");
-      checkColor(d, d.specularTransmittance, "specularTransmittance");
-      return makeRoughDielectric(d.distribution, checkedAlpha(d), eta, d.specularReflectance, d.specularTransmittance);
+      auto r = colorTexture(d, d.specularReflectance, "specularReflectance");
+      auto t = colorTexture(d, d.specularTransmittance, "specularTransmittance");
+      return makeRoughDielectric(d.distribution, checkedAlpha(d), alphaTexture(d), eta, std::move(r), std::move(t));
     }
     case T::Conductor:
     case T::RoughConductor: {
       checkColor(d, d.eta, "eta");
       checkColor(d, d.k, "k");
-      checkColor(d, d.specularReflectance, "specularReflectance");
+      auto r = colorTexture(d, d.specularReflectance, "specularReflectance");
       if (!(d.extIOR > 0)) fail(d, "extIOR must be positive");
       // Mitsuba: the conductor's eta and k are given relative to vacuum; divide by the exterior IOR.
       const Color eta = d.eta / d.extIOR, k = d.k / d.extIOR;
       if (!d.mirror && eta.isBlack() && k.isBlack()) fail(d, "conductor with eta = k = 0");
-      if (d.type == T::Conductor) return makeConductor(eta, k, d.mirror, d.specularReflectance);
-      return makeRoughConductor(d.distribution, checkedAlpha(d), eta, k, d.mirror, d.specularReflectance);
+      if (d.type == T::Conductor) return makeConductor(eta, k, d.mirror, std::move(r));
+      return makeRoughConductor(d.distribution, checkedAlpha(d), alphaTexture(d), eta, k, d.mirror, std::move(r));
     }
     case T::Plastic:
     case T::RoughPlastic: {
       const float eta = relativeIor(d);
-      checkColor(d, d.specularReflectance, "specularReflectance");
+      auto r = colorTexture(d, d.specularReflectance, "specularReflectance");
       auto tex = makeTexture(d.reflectance, d.id);
-      if (d.type == T::Plastic) return makePlastic(eta, tex, d.specularReflectance, d.nonlinear);
-      return makeRoughPlastic(d.distribution, checkedAlpha(d), eta, tex, d.specularReflectance, d.nonlinear);
+      if (d.alphaTexture) fail(d, "a textured alpha is supported on roughconductor and roughdielectric only");
+      if (d.type == T::Plastic) return makePlastic(eta, tex, std::move(r), d.nonlinear);
+      return makeRoughPlastic(d.distribution, checkedAlpha(d), eta, tex, std::move(r), d.nonlinear);
     }
   }
   fail(d, "unknown bsdf type");

@@ -20,11 +20,11 @@ namespace {
 
 class Plastic final : public Bsdf {
  public:
-  Plastic(float eta, TexturePtr diffuse, Color specR, bool nonlinear)
-      : eta_(eta), diffuse_(std::move(diffuse)), specR_(specR), nonlinear_(nonlinear) {
+  Plastic(float eta, TexturePtr diffuse, TexturePtr specR, bool nonlinear)
+      : eta_(eta), diffuse_(std::move(diffuse)), specR_(std::move(specR)), nonlinear_(nonlinear) {
     fdrInt_ = fresnelDiffuseReflectance(1 / eta_);
     invEta2_ = 1 / (eta_ * eta_);
-    const float d = luminance(diffuse_->average()), s = luminance(specR_);
+    const float d = luminance(diffuse_->average()), s = luminance(specR_->average());
     specularWeight_ = d + s > 0 ? s / (d + s) : 0.5f;
   }
 
@@ -44,7 +44,7 @@ class Plastic final : public Bsdf {
     if (uc < pSpec) {
       const float F = fresnelDielectric(wo.z, eta_);
       s.wi = reflectZ(wo);
-      s.f = specR_ * (F / wo.z);
+      s.f = specR_->eval(q.uv) * (F / wo.z);
       s.pdfW = s.pdfRevW = pSpec;
       s.delta = true;
       return s;
@@ -74,7 +74,7 @@ class Plastic final : public Bsdf {
   // Normal-incidence estimate: specular F(1) plus the diffuse albedo (1 - F) rho.
   Color albedo(const Vec2& uv) const override {
     const float F = fresnelDielectric(1, eta_);
-    return specR_ * F + diffuse_->eval(uv) * (1 - F);
+    return specR_->eval(uv) * F + diffuse_->eval(uv) * (1 - F);
   }
 
   float probSpecular(float cosO) const {
@@ -91,15 +91,15 @@ class Plastic final : public Bsdf {
   }
   float eta_;
   TexturePtr diffuse_;
-  Color specR_;
+  TexturePtr specR_;
   bool nonlinear_;
   float fdrInt_, invEta2_, specularWeight_;
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makePlastic(float eta, TexturePtr diffuse, Color specR, bool nonlinear) {
-  return std::make_unique<Plastic>(eta, std::move(diffuse), specR, nonlinear);
+std::unique_ptr<Bsdf> makePlastic(float eta, TexturePtr diffuse, TexturePtr specR, bool nonlinear) {
+  return std::make_unique<Plastic>(eta, std::move(diffuse), std::move(specR), nonlinear);
 }
 
 }  // namespace mlt

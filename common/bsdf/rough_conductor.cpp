@@ -15,28 +15,29 @@ namespace {
 
 class RoughConductor final : public Bsdf {
  public:
-  RoughConductor(MicrofacetType t, float alpha, Color eta, Color k, bool mirror, Color r)
-      : mf_(t, alpha), eta_(eta), k_(k), mirror_(mirror), specR_(r) {}
+  RoughConductor(MicrofacetType t, float alpha, TexturePtr alphaTex, Color eta, Color k, bool mirror, TexturePtr r)
+      : mf_(t, alpha), alphaTex_(std::move(alphaTex)), eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {}
 
-  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
+  Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);
     const Vec3 h = normalize(wo + wi);
-    const float D = mf_.D(h);
+    const Microfacet mf = microfacet(q);
+    const float D = mf.D(h);
     if (D == 0) return Color(0.0f);
-    const float G = mf_.G(wo, wi, h);
-    return specR_ * fresnel(dot(wo, h)) * (D * G / (4 * wo.z * wi.z));
+    const float G = mf.G(wo, wi, h);
+    return specR_->eval(q.uv) * fresnel(dot(wo, h)) * (D * G / (4 * wo.z * wi.z));
   }
   // pdfW(wi) = D_wo(h) / (4 |wo.h|) (Walter et al. 2007, eq. 14 with the reflection Jacobian).
-  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
+  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     if (wo.z <= 0 || wi.z <= 0) return 0;
     const Vec3 h = normalize(wo + wi);
     const float woh = dot(wo, h);
     if (woh <= 0) return 0;
-    return mf_.pdfVisible(wo, h) / (4 * woh);
+    return microfacet(q).pdfVisible(wo, h) / (4 * woh);
   }
   std::optional<BsdfSample> sample(const Vec3& wo, float, Vec2 uDir, const BsdfQuery& q) const override {
     if (wo.z <= 0) return std::nullopt;
-    const Vec3 m = mf_.sampleVisible(wo, uDir);
+    const Vec3 m = microfacet(q).sampleVisible(wo, uDir);
     BsdfSample s;
     s.wi = reflectAbout(wo, m);
     if (s.wi.z <= 0) return std::nullopt;  // reflected below the horizon: absorbed (its mass is excluded from pdf)
@@ -58,20 +59,26 @@ class RoughConductor final : public Bsdf {
     return BsdfSampleInverse{clampPrimary(gamma.pick), *uDir, pdfW};
   }
   bool isDelta() const override { return false; }
-  Color albedo(const Vec2&) const override { return specR_ * fresnel(1); }
+  Color albedo(const Vec2& uv) const override { return specR_->eval(uv) * fresnel(1); }
 
  private:
+  // The distribution at the hit: alpha from the texture (its luminance) when roughness is textured.
+  Microfacet microfacet(const BsdfQuery& q) const {
+    return alphaTex_ ? Microfacet(mf_.type(), textureAlpha(*alphaTex_, q.uv)) : mf_;
+  }
   Color fresnel(float c) const { return mirror_ ? Color(1.0f) : fresnelConductor(std::fmin(1.0f, c), eta_, k_); }
   Microfacet mf_;
+  TexturePtr alphaTex_;  // null: constant alpha (mf_)
   Color eta_, k_;
   bool mirror_;
-  Color specR_;
+  TexturePtr specR_;
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType t, float alpha, Color eta, Color k, bool mirror, Color r) {
-  return std::make_unique<RoughConductor>(t, alpha, eta, k, mirror, r);
+std::unique_ptr<Bsdf> makeRoughConductor(MicrofacetType t, float alpha, TexturePtr alphaTex, Color eta, Color k, bool mirror,
+                                         TexturePtr r) {
+  return std::make_unique<RoughConductor>(t, alpha, std::move(alphaTex), eta, k, mirror, std::move(r));
 }
 
 }  // namespace mlt

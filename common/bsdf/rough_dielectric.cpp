@@ -24,8 +24,8 @@ namespace {
 
 class RoughDielectric final : public Bsdf {
  public:
-  RoughDielectric(MicrofacetType t, float alpha, float eta, Color r, Color tr)
-      : mf_(t, alpha), eta_(eta), specR_(r), specT_(tr) {}
+  RoughDielectric(MicrofacetType t, float alpha, TexturePtr alphaTex, float eta, TexturePtr r, TexturePtr tr)
+      : mf_(t, alpha), alphaTex_(std::move(alphaTex)), eta_(eta), specR_(std::move(r)), specT_(std::move(tr)) {}
 
   // The half vector of a pair, oriented to the exterior; false if the pair cannot be connected
   // (grazing, back-facing microfacet, or degenerate).
@@ -55,26 +55,27 @@ class RoughDielectric final : public Bsdf {
     const std::optional<Half> hv = halfVector(wo, wi);
     if (!hv) return Color(0.0f);
     const Vec3& h = hv->h;
-    const float D = mf_.D(h);
+    const Microfacet mf = microfacet(q);
+    const float D = mf.D(h);
     if (D == 0) return Color(0.0f);
     const float woh = dot(wo, h), wih = dot(wi, h);
     const float F = fresnelDielectric(woh, eta_);
-    const float G = mf_.G(wo, wi, h);
+    const float G = mf.G(wo, wi, h);
     const float cosO = std::fabs(wo.z), cosI = std::fabs(wi.z);
-    if (hv->reflect) return specR_ * (F * D * G / (4 * cosO * cosI));
+    if (hv->reflect) return specR_->eval(q.uv) * (F * D * G / (4 * cosO * cosI));
     const float e = hv->etaRel, denom = woh + e * wih;
     float value = (1 - F) * D * G * e * e * std::fabs(woh * wih) / (cosO * cosI * denom * denom);
     if (q.mode == TransportMode::Radiance) value /= e * e;
-    return specT_ * value;
+    return specT_->eval(q.uv) * value;
   }
 
-  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
+  float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     const std::optional<Half> hv = halfVector(wo, wi);
     if (!hv) return 0;
     const Vec3& h = hv->h;
     const float woh = dot(wo, h), wih = dot(wi, h);
     const Vec3 woUp = wo.z > 0 ? wo : -wo;
-    const float pdfH = mf_.pdfVisible(woUp, h);
+    const float pdfH = microfacet(q).pdfVisible(woUp, h);
     const float F = fresnelDielectric(woh, eta_);
     if (hv->reflect) return pdfH * F / (4 * std::fabs(wih));
     const float e = hv->etaRel, denom = woh + e * wih;
@@ -84,7 +85,7 @@ class RoughDielectric final : public Bsdf {
   std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2 uDir, const BsdfQuery& q) const override {
     if (wo.z == 0) return std::nullopt;
     const Vec3 woUp = wo.z > 0 ? wo : -wo;
-    const Vec3 m = mf_.sampleVisible(woUp, uDir);
+    const Vec3 m = microfacet(q).sampleVisible(woUp, uDir);
     float cosThetaT;
     const float F = fresnelDielectric(dot(wo, m), eta_, &cosThetaT);
     BsdfSample s;
@@ -123,20 +124,27 @@ class RoughDielectric final : public Bsdf {
     return BsdfSampleInverse{uc, *uDir, pdfW};
   }
   bool isDelta() const override { return false; }
-  Color albedo(const Vec2&) const override {
-    return {std::fmax(specR_.r, specT_.r), std::fmax(specR_.g, specT_.g), std::fmax(specR_.b, specT_.b)};
+  Color albedo(const Vec2& uv) const override {
+    const Color r = specR_->eval(uv), t = specT_->eval(uv);
+    return {std::fmax(r.r, t.r), std::fmax(r.g, t.g), std::fmax(r.b, t.b)};
   }
 
  private:
+  // The distribution at the hit: alpha from the texture (its luminance) when roughness is textured.
+  Microfacet microfacet(const BsdfQuery& q) const {
+    return alphaTex_ ? Microfacet(mf_.type(), textureAlpha(*alphaTex_, q.uv)) : mf_;
+  }
   Microfacet mf_;
+  TexturePtr alphaTex_;  // null: constant alpha (mf_)
   float eta_;
-  Color specR_, specT_;
+  TexturePtr specR_, specT_;
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType t, float alpha, float eta, Color r, Color tr) {
-  return std::make_unique<RoughDielectric>(t, alpha, eta, r, tr);
+std::unique_ptr<Bsdf> makeRoughDielectric(MicrofacetType t, float alpha, TexturePtr alphaTex, float eta, TexturePtr r,
+                                          TexturePtr tr) {
+  return std::make_unique<RoughDielectric>(t, alpha, std::move(alphaTex), eta, std::move(r), std::move(tr));
 }
 
 }  // namespace mlt

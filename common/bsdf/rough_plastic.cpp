@@ -29,17 +29,17 @@ constexpr int kStrata = 32;
 
 class RoughPlastic final : public Bsdf {
  public:
-  RoughPlastic(MicrofacetType type, float alpha, float eta, TexturePtr diffuse, Color specR, bool nonlinear)
-      : mf_(type, alpha), eta_(eta), diffuse_(std::move(diffuse)), specR_(specR), nonlinear_(nonlinear) {
+  RoughPlastic(MicrofacetType type, float alpha, float eta, TexturePtr diffuse, TexturePtr specR, bool nonlinear)
+      : mf_(type, alpha), eta_(eta), diffuse_(std::move(diffuse)), specR_(std::move(specR)), nonlinear_(nonlinear) {
     fdrInt_ = fresnelDiffuseReflectance(1 / eta_);
-    const float d = luminance(diffuse_->average()), s = luminance(specR_);
+    const float d = luminance(diffuse_->average()), s = luminance(specR_->average());
     specularWeight_ = d + s > 0 ? s / (d + s) : 0.5f;
     buildTable();
   }
 
   Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);
-    return specular(wo, wi) + rhoEff(q.uv) * (T(wo.z) * T(wi.z) * kInvPi / tAvg_);
+    return specular(wo, wi, q.uv) + rhoEff(q.uv) * (T(wo.z) * T(wi.z) * kInvPi / tAvg_);
   }
   float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery&) const override {
     if (wo.z <= 0 || wi.z <= 0) return 0;
@@ -91,15 +91,15 @@ class RoughPlastic final : public Bsdf {
     return inv;
   }
   bool isDelta() const override { return false; }
-  Color albedo(const Vec2& uv) const override { return specR_ * (1 - T(1)) + rhoEff(uv) * T(1); }
+  Color albedo(const Vec2& uv) const override { return specR_->eval(uv) * (1 - T(1)) + rhoEff(uv) * T(1); }
 
  private:
-  Color specular(const Vec3& wo, const Vec3& wi) const {
+  Color specular(const Vec3& wo, const Vec3& wi, Vec2 uv) const {
     const Vec3 h = normalize(wo + wi);
     const float D = mf_.D(h);
     if (D == 0) return Color(0.0f);
     const float F = fresnelDielectric(dot(wo, h), eta_);
-    return specR_ * (F * D * mf_.G(wo, wi, h) / (4 * wo.z * wi.z));
+    return specR_->eval(uv) * (F * D * mf_.G(wo, wi, h) / (4 * wo.z * wi.z));
   }
   Color rhoEff(Vec2 uv) const {
     const Color rho = diffuse_->eval(uv);
@@ -149,7 +149,7 @@ class RoughPlastic final : public Bsdf {
   Microfacet mf_;
   float eta_;
   TexturePtr diffuse_;
-  Color specR_;
+  TexturePtr specR_;  // specular_reflectance at the hit's uv (alpha is not texturable: the table depends on it)
   bool nonlinear_;
   float fdrInt_, specularWeight_, tAvg_ = 1;
   std::vector<float> table_;
@@ -157,9 +157,9 @@ class RoughPlastic final : public Bsdf {
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeRoughPlastic(MicrofacetType type, float alpha, float eta, TexturePtr diffuse, Color specR,
+std::unique_ptr<Bsdf> makeRoughPlastic(MicrofacetType type, float alpha, float eta, TexturePtr diffuse, TexturePtr specR,
                                        bool nonlinear) {
-  return std::make_unique<RoughPlastic>(type, alpha, eta, std::move(diffuse), specR, nonlinear);
+  return std::make_unique<RoughPlastic>(type, alpha, eta, std::move(diffuse), std::move(specR), nonlinear);
 }
 
 }  // namespace mlt

@@ -1,5 +1,6 @@
 #include "common/bsdf/texture.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -13,6 +14,11 @@
 #pragma GCC diagnostic pop
 
 namespace mlt {
+
+float textureAlpha(const Texture& t, Vec2 uv) {
+  const float a = luminance(t.eval(uv));
+  return std::isfinite(a) ? std::clamp(a, 1e-4f, 4.0f) : 1e-4f;
+}
 
 float srgbToLinear(float v) {
   return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
@@ -101,7 +107,7 @@ Color BitmapTexture::eval(Vec2 uv) const {
 }
 
 // ---------------------------------------------------------------------------------------------------
-std::shared_ptr<const Texture> makeTexture(const TextureDesc& d, const std::string& owner) {
+std::shared_ptr<const Texture> makeTexture(const TextureDesc& d, const std::string& owner, const char* kind) {
   switch (d.type) {
     case TextureDesc::Type::Constant:
       return std::make_shared<ConstantTexture>(d.value);
@@ -111,10 +117,10 @@ std::shared_ptr<const Texture> makeTexture(const TextureDesc& d, const std::stri
       try {
         return std::make_shared<BitmapTexture>(d.filename, d.srgb, d.uvScale, d.uvOffset);
       } catch (const std::exception& e) {
-        throw std::runtime_error("bsdf '" + owner + "': bitmap texture: " + e.what());
+        throw std::runtime_error(std::string(kind) + " '" + owner + "': bitmap texture: " + e.what());
       }
   }
-  throw std::runtime_error("bsdf '" + owner + "': unknown texture type");
+  throw std::runtime_error(std::string(kind) + " '" + owner + "': unknown texture type");
 }
 
 }  // namespace mlt

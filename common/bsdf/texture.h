@@ -1,4 +1,5 @@
-// Reflectance textures (Mitsuba's constant spectrum, bitmap and checkerboard), looked up by uv.
+// Colour textures (Mitsuba's constant spectrum, bitmap and checkerboard), looked up by uv: reflectances,
+// specular reflectance / transmittance, roughness (textureAlpha) and area-light radiance.
 // The uv transform uv' = uvScale * uv + uvOffset is applied inside eval().
 #pragma once
 #include <memory>
@@ -70,10 +71,15 @@ class BitmapTexture final : public Texture {
   Color average_, max_;
 };
 
+// A roughness texture's alpha at uv: the luminance of the texture's colour (Mitsuba's eval_1 on an RGB
+// texture), clamped to [1e-4, 4] so a dark texel cannot make a singular distribution.
+float textureAlpha(const Texture& t, Vec2 uv);
+
 // sRGB transfer function decode (IEC 61966-2-1).
 float srgbToLinear(float v);
 
-// Builds a texture from its description. `owner` (e.g. the BSDF id) is named in error messages.
-std::shared_ptr<const Texture> makeTexture(const TextureDesc& desc, const std::string& owner);
+// Builds a texture from its description. `kind` and `owner` (e.g. "bsdf" and its id) are named in error
+// messages.
+std::shared_ptr<const Texture> makeTexture(const TextureDesc& desc, const std::string& owner, const char* kind = "bsdf");
 
 }  // namespace mlt

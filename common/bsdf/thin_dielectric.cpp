@@ -16,12 +16,12 @@ Color colorMax(const Color& a, const Color& b) { return {std::fmax(a.r, b.r), st
 // reflections gives R' = R + T^2 R / (1 - R^2) and T' = 1 - R', with transmission straight through.
 class ThinDielectric final : public Bsdf {
  public:
-  ThinDielectric(float eta, Color r, Color t) : eta_(eta), specR_(r), specT_(t) {}
+  ThinDielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {}
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }
 
-  std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2, const BsdfQuery&) const override {
+  std::optional<BsdfSample> sample(const Vec3& wo, float uc, Vec2, const BsdfQuery& q) const override {
     if (wo.z == 0) return std::nullopt;
     const float R = slabReflectance(std::fabs(wo.z)), T = 1 - R;
     BsdfSample s;
@@ -29,11 +29,11 @@ class ThinDielectric final : public Bsdf {
     s.eta = 1;
     if (uc < R) {
       s.wi = reflectZ(wo);
-      s.f = specR_ * (R / std::fabs(wo.z));
+      s.f = specR_->eval(q.uv) * (R / std::fabs(wo.z));
       s.pdfW = s.pdfRevW = R;
     } else {
       s.wi = -wo;
-      s.f = specT_ * (T / std::fabs(wo.z));
+      s.f = specT_->eval(q.uv) * (T / std::fabs(wo.z));
       s.pdfW = s.pdfRevW = T;
     }
     return s;
@@ -48,7 +48,7 @@ class ThinDielectric final : public Bsdf {
     return std::nullopt;
   }
   bool isDelta() const override { return true; }
-  Color albedo(const Vec2&) const override { return colorMax(specR_, specT_); }
+  Color albedo(const Vec2& uv) const override { return colorMax(specR_->eval(uv), specT_->eval(uv)); }
 
   float slabReflectance(float absCos) const {
     float R = fresnelDielectric(absCos, eta_);
@@ -59,13 +59,13 @@ class ThinDielectric final : public Bsdf {
 
  private:
   float eta_;
-  Color specR_, specT_;
+  TexturePtr specR_, specT_;  // at the hit's uv
 };
 
 }  // namespace
 
-std::unique_ptr<Bsdf> makeThinDielectric(float eta, Color r, Color t) {
-  return std::make_unique<ThinDielectric>(eta, r, t);
+std::unique_ptr<Bsdf> makeThinDielectric(float eta, TexturePtr r, TexturePtr t) {
+  return std::make_unique<ThinDielectric>(eta, std::move(r), std::move(t));
 }
 
 }  // namespace mlt

@@ -1,6 +1,8 @@
 // Area light over a triangle mesh: uniform by area (a triangle picked through a CDF over areas, then a
 // uniform point on it), constant radiance Le emitted on the front side only (dot(w, ng) > 0, ng from the
-// counter-clockwise winding), like Mitsuba's `area` emitter.
+// counter-clockwise winding), like Mitsuba's `area` emitter. A textured radiance (MeshDesc::emissionTexture)
+// is evaluated at the point's uv: the hit's uv in L(), the sampled point's interpolated uv in sampleLi/Le,
+// so every technique sees the same Le; sampling stays uniform by area.
 //
 // Locality of the position sample (Markov chains). A mesh of more than kOneLevelTriangles triangles picks
 // its triangle in two levels: u.x a group of about sqrt(T) consecutive triangles (mesh order), u.y a
@@ -17,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "common/bsdf/texture.h"
 #include "common/core/sampling.h"
 #include "common/core/sampling_inverse.h"
 #include "common/emitter/light_factories.h"
@@ -35,19 +38,21 @@ class AreaLight final : public Light {
   std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const override;
   void pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const override;
   Color L(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& w) const override {
-    return dot(n, w) > 0 ? Le_ : Color();
+    return dot(n, w) > 0 ? Le(uv) : Color();
   }
   std::optional<Inverse2D> invertSampleLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight,
                                           const InverseGamma& gamma) const override;
   std::optional<LightLeInverse> invertSampleLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w,
                                                const InverseGamma& gamma) const override;
-  // Phi = integral over area and hemisphere of Le cos = pi * A * Le.
-  Color power() const override { return Le_ * (kPi * area_); }
+  // Phi = integral over area and hemisphere of Le cos = pi * A * Le (textured: the texture's average).
+  Color power() const override { return (tex_ ? tex_->average() : Le_) * (kPi * area_); }
 
  private:
   struct PointSample {
     Vec3 p, ng;
+    Vec2 uv;
   };
+  Color Le(Vec2 uv) const { return tex_ ? tex_->eval(uv) : Le_; }
   PointSample samplePoint(Vec2 u) const;
   static constexpr size_t kOneLevelTriangles = 16;
   // Inverse of samplePoint: the u that lands on p (the triangle found by search), or nullopt if p is on
@@ -70,11 +75,20 @@ class AreaLight final : public Light {
   std::vector<double> groupCdf_;
   float area_ = 0;
   Color Le_;
+  std::shared_ptr<const Texture> tex_;  // null: constant Le_
+  std::vector<Vec2> uv_;                // 3 per triangle, only with a texture
 };
 
 AreaLight::AreaLight(const MeshDesc& mesh) {
   if (!mesh.emission) throw std::runtime_error("area light on mesh '" + mesh.name + "': mesh has no emission");
   Le_ = *mesh.emission;
+  if (mesh.emissionTexture) {
+    tex_ = makeTexture(*mesh.emissionTexture, mesh.name, "area light on mesh");
+    const Color m = tex_->maxValue();
+    if (!m.isFinite() || tex_->average().r < 0 || tex_->average().g < 0 || tex_->average().b < 0)
+      throw std::runtime_error("area light on mesh '" + mesh.name + "': textured radiance must be finite and non-negative");
+    Le_ = tex_->average();
+  }
   if (!Le_.isFinite() || Le_.r < 0 || Le_.g < 0 || Le_.b < 0)
     throw std::runtime_error("area light on mesh '" + mesh.name + "': radiance must be finite and non-negative");
   if (mesh.indices.size() % 3 != 0)
@@ -93,6 +107,8 @@ AreaLight::AreaLight(const MeshDesc& mesh) {
                                  " out of range");
       p[k] = mesh.positions[idx];
       v_.push_back(p[k]);
+      // Without mesh uvs a hit's uv is its barycentric (u, v) (accel.cpp): vertex k at (0,0), (1,0), (0,1).
+      if (tex_) uv_.push_back(mesh.uvs.empty() ? Vec2(k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f) : mesh.uvs.at(idx));
     }
     const Vec3 c = cross(p[1] - p[0], p[2] - p[0]);
     const float len = length(c);
@@ -206,7 +222,12 @@ AreaLight::PointSample AreaLight::samplePoint(Vec2 u) const {
   }
   const Vec2 b = sampleUniformTriangle({ux, uy});
   const Vec3* p = &v_[3 * i];
-  return {p[0] * b.x + p[1] * b.y + p[2] * (1 - b.x - b.y), ng_[i]};
+  Vec2 uv;
+  if (tex_) {
+    const Vec2* t = &uv_[3 * i];
+    uv = t[0] * b.x + t[1] * b.y + t[2] * (1 - b.x - b.y);
+  }
+  return {p[0] * b.x + p[1] * b.y + p[2] * (1 - b.x - b.y), ng_[i], uv};
 }
 
 std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const {
@@ -218,10 +239,11 @@ std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const 
   const float cosLight = -dot(wi, ps.ng);
   if (cosLight == 0) return std::nullopt;
   LightLiSample s;
-  s.L = cosLight > 0 ? Le_ : Color();  // back side: a valid sample that carries nothing
+  s.L = cosLight > 0 ? Le(ps.uv) : Color();  // back side: a valid sample that carries nothing
   s.wi = wi;
   s.pLight = ps.p;
   s.nLight = ps.ng;
+  s.uv = ps.uv;
   s.pdfA = 1.0f / area_;
   s.pdfW = pdfAToW(s.pdfA, d2, std::fabs(cosLight));  // Veach eq. 8.10
   return s;
@@ -237,11 +259,12 @@ std::optional<LightLeSample> AreaLight::sampleLe(Vec2 uPos, Vec2 uDir) const {
   const float pdfDir = cosineHemispherePdfW(local.z);
   if (!(pdfDir > 0)) return std::nullopt;
   LightLeSample s;
-  s.L = Le_;
+  s.L = Le(ps.uv);
   s.ray.o = ps.p;  // the exact point on the light; tMin skips the emitter's own surface
   s.ray.d = normalize(Frame(ps.ng).toWorld(local));
   s.ray.tMin = 1e-4f * std::fmax(1.0f, std::fmax(std::fabs(ps.p.x), std::fmax(std::fabs(ps.p.y), std::fabs(ps.p.z))));
   s.nLight = ps.ng;
+  s.uv = ps.uv;
   s.pdfPos = 1.0f / area_;
   s.pdfDir = pdfDir;
   return s;

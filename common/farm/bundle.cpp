@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "common/core/sha256.h"
-#include "common/scene/mitsuba_loader.h"
+#include "common/scene/scene_loader.h"
 
 namespace fs = std::filesystem;
 
@@ -45,7 +45,7 @@ void validateBundlePath(const std::string& path) {
 SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines) {
   SceneDesc desc;
   try {
-    desc = loadMitsubaScene(sceneFile, defines);
+    desc = loadScene(sceneFile, defines);
   } catch (const std::exception& e) {
     throw FarmError(FarmError::Code::InvalidArgument, e.what());
   }

@@ -1,14 +1,14 @@
 // Scene loading shared by coordinator and worker (see scene_loading.h).
 #include "common/farm/scene_loading.h"
 
-#include "common/scene/mitsuba_loader.h"
 #include "common/farm/farm_types.h"
+#include "common/scene/scene_loader.h"
 
 namespace mlt::farm {
 
 SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines) {
   try {
-    return loadMitsubaScene(path, defines);
+    return loadScene(path, defines);
   } catch (const std::exception& e) {
     throw FarmError(FarmError::Code::InvalidArgument, e.what());
   }

@@ -11,7 +11,7 @@
 
 namespace mlt::farm {
 
-// loadMitsubaScene; errors become FarmError(InvalidArgument) carrying the loader's message.
+// loadScene (Mitsuba XML or pbrt-v3 by extension); errors become FarmError(InvalidArgument) carrying the loader's message.
 // `defines` are the job's scene parameters (Mitsuba -D).
 SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines = {});
 // Fills what the client left to the scene: film size, max depth, rr depth.

@@ -153,6 +153,7 @@ int generateLightSubpath(const RenderScene& scene, SampleSource& source, int max
   v.lightIndex = index;
   v.p = le->ray.o;
   v.ng = v.ns = le->nLight;
+  v.uv = le->uv;  // a textured area light's Le() at this point (s = 1, t = 1)
   // The light vertex's own weight: 1 / (pmf pdfPos); its emitted radiance enters through Le() (s = 1
   // connections to the camera) or through the first segment's throughput below.
   v.beta = Color(1 / (pmf * le->pdfPos));
@@ -225,6 +226,7 @@ Color connectBdpt(const RenderScene& scene, SampleSource& source, Vertex* light,
     q.lightIndex = index;
     q.p = ls->pLight;
     q.ng = q.ns = ls->nLight;
+    q.uv = ls->uv;
     q.beta = ls->L / (ls->pdfW * pmf);
     q.pdfFwd = q.pdfLightOrigin(scene, pt);
     L = pt.beta * pt.f(q) * q.beta;

@@ -18,6 +18,7 @@ struct LightLiSample {     // next-event estimation: a point on the light as see
   Vec3 wi;                 // unit direction from the reference point toward the light
   Vec3 pLight;             // point on the light (for infinite lights: ref + wi * 2 * sceneRadius)
   Vec3 nLight;             // light surface normal at pLight (zero for point/spot; -wi for infinite)
+  Vec2 uv;                 // area lights: the surface uv at pLight (what L() takes), so a textured radiance agrees
   float pdfW = 0;          // solid-angle density of wi at the reference point (1 for delta lights)
   float pdfA = 0;          // area density of pLight (1 for delta position); for infinite lights: pdfW
   bool deltaPosition = false;
@@ -29,6 +30,7 @@ struct LightLeSample {     // emission: a ray leaving the light (light subpath s
   Ray ray;                 // o = the exact point on the light (the vertex); area lights set tMin > 0 to
                            // skip their own surface, so the ray can be traced as is
   Vec3 nLight;             // zero for point/spot
+  Vec2 uv;                 // area lights: the surface uv at ray.o (what L() takes)
   float pdfPos = 0;        // pdfA of the origin (1 for delta position; for infinite lights the pdf of the
                            // point on the disk perpendicular to the direction, 1 / (pi R^2))
   float pdfDir = 0;        // pdfW of the direction (1 for delta direction)

@@ -17,4 +17,10 @@ MeshDesc readPly(const std::string& path);
 // uvs are kept only when every face corner has them. Mitsuba's flip_tex_coords (default true) maps v to 1 - v.
 MeshDesc readObj(const std::string& path, bool flipTexCoords = true);
 
+// Mitsuba's `serialized` format (versions 3 and 4; layout in serialized_reader.cpp): shape `shapeIndex`
+// of the file, in object space, with its normals and uvs when present (vertex colours are dropped).
+// *faceNormalsHint is set when the record asks for face normals (flag 0x0010). Errors name the file and
+// the shape index.
+MeshDesc readSerialized(const std::string& path, int shapeIndex, bool* faceNormalsHint = nullptr);
+
 }  // namespace mlt

@@ -43,6 +43,11 @@ MicrofacetType readDistribution(PropertyList& props) {
   props.fail(*props.find("distribution"), "unsupported microfacet distribution '" + *d + "' (supported: beckmann, ggx)");
 }
 
+bool isTextureProp(PropertyList& props, const char* name) {
+  const Prop* p = props.find(name);
+  return p && (p->kind == Prop::Kind::Texture || p->kind == Prop::Kind::Ref);
+}
+
 float readAlpha(PropertyList& props) {
   const bool hasU = props.has("alpha_u"), hasV = props.has("alpha_v");
   float alpha = 0.1f;
@@ -69,6 +74,24 @@ Color readColor(PropertyList& props, const char* name, Color def) {
   const Color c = props.getColor(name, def);
   if (props.has(name)) requireNonNegative(props, name, c);
   return c;
+}
+
+// A roughconductor's / roughdielectric's alpha: a float, or a texture (its luminance at the hit's uv).
+void readAlphaOrTexture(Loader& L, PropertyList& props, BsdfDesc& d) {
+  for (const char* n : {"alpha_u", "alpha_v"})
+    if (isTextureProp(props, n)) props.fail(*props.find(n), std::string("a textured ") + n + " (anisotropic) is not supported");
+  if (isTextureProp(props, "alpha")) {
+    d.alphaTexture = L.optTexture(props, "alpha");
+    d.alpha = 0.1f;  // unused while the texture is set
+    return;
+  }
+  d.alpha = readAlpha(props);
+}
+
+// A colour parameter Mitsuba lets a texture drive: colour, nested <texture> or <ref> to a texture.
+TextureDesc readColorTexture(Loader& L, PropertyList& props, const char* name, Color def) {
+  if (!props.has(name)) return TextureDesc(def);
+  return *L.optTexture(props, name);
 }
 
 // Conductor optics: `material` preset, or explicit eta and k.
@@ -98,7 +121,7 @@ void readConductor(Loader& L, PropertyList& props, BsdfDesc& d) {
   }
   // 0.6's ext_eta; 3.x conductors take eta relative to vacuum.
   d.extIOR = readIor(props, "ext_eta", L.majorVersion() < 2 ? 1.000277f : 1.0f);
-  d.specularReflectance = readColor(props, "specular_reflectance", Color(1.0f));
+  d.specularReflectance = readColorTexture(L, props, "specular_reflectance", Color(1.0f));
 }
 
 // uv' = scale * uv + offset from 0.6's uscale/vscale/uoffset/voffset and 3.x's to_uv.
@@ -218,11 +241,11 @@ int Loader::parseBsdf(const XmlElement& el) {
     d.type = type == "dielectric" ? T::Dielectric : type == "thindielectric" ? T::ThinDielectric : T::RoughDielectric;
     d.intIOR = readIor(props, "int_ior", 1.5046f);
     d.extIOR = readIor(props, "ext_ior", 1.000277f);
-    d.specularReflectance = readColor(props, "specular_reflectance", Color(1.0f));
-    d.specularTransmittance = readColor(props, "specular_transmittance", Color(1.0f));
+    d.specularReflectance = readColorTexture(*this, props, "specular_reflectance", Color(1.0f));
+    d.specularTransmittance = readColorTexture(*this, props, "specular_transmittance", Color(1.0f));
     if (d.type == T::RoughDielectric) {
       d.distribution = readDistribution(props);
-      d.alpha = readAlpha(props);
+      readAlphaOrTexture(*this, props, d);
       props.ignore({"sample_visible"});
     }
   } else if (type == "conductor" || type == "roughconductor") {
@@ -230,19 +253,21 @@ int Loader::parseBsdf(const XmlElement& el) {
     readConductor(*this, props, d);
     if (d.type == T::RoughConductor) {
       d.distribution = readDistribution(props);
-      d.alpha = readAlpha(props);
+      readAlphaOrTexture(*this, props, d);
       props.ignore({"sample_visible"});
     }
   } else if (type == "plastic" || type == "roughplastic") {
     d.type = type == "plastic" ? T::Plastic : T::RoughPlastic;
     d.reflectance = optTexture(props, "diffuse_reflectance").value_or(TextureDesc{});
     if (!props.has("diffuse_reflectance")) d.reflectance.value = Color(0.5f);
-    d.specularReflectance = readColor(props, "specular_reflectance", Color(1.0f));
+    d.specularReflectance = readColorTexture(*this, props, "specular_reflectance", Color(1.0f));
     d.intIOR = readIor(props, "int_ior", 1.49f);
     d.extIOR = readIor(props, "ext_ior", 1.000277f);
     d.nonlinear = props.getBool("nonlinear", false);
     if (d.type == T::RoughPlastic) {
       d.distribution = readDistribution(props);
+      if (isTextureProp(props, "alpha"))
+        props.fail(*props.find("alpha"), "a textured alpha is not supported on roughplastic (nor in Mitsuba 3)");
       d.alpha = readAlpha(props);
       props.ignore({"sample_visible"});
     }

@@ -36,7 +36,11 @@ class Loader {
   void parseEmitter(const XmlElement& el);   // top-level (non-area) emitters
   void parseSensor(const XmlElement& el);
   void parseIntegrator(const XmlElement& el);
-  Color parseAreaEmitter(const XmlElement& el);
+  struct AreaEmission {
+    Color radiance;
+    std::optional<TextureDesc> texture;  // a textured radiance
+  };
+  AreaEmission parseAreaEmitter(const XmlElement& el);
   // Resolves a file name relative to the referencing file, then the main scene's folder; records it.
   std::string resolveFile(const XmlElement& el, const std::string& filename, const char* what);
   void warn(const XmlElement& el, const std::string& msg);

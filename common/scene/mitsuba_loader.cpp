@@ -354,21 +354,27 @@ void Loader::parseIntegrator(const XmlElement& el) {
 // Emitters
 // ---------------------------------------------------------------------------------------------------------
 
-Color Loader::parseAreaEmitter(const XmlElement& el) {
+Loader::AreaEmission Loader::parseAreaEmitter(const XmlElement& el) {
   checkAttributes(el, {"type", "id", "name"});
   const std::string type = requireAttr(el, "type");
   if (type != "area") failAt(el, "only 'area' emitters can be attached to a shape");
   PropertyList props(el);
   std::vector<const XmlElement*> nested;
   collect(el, props, nested);
-  if (!nested.empty()) failAt(*nested.front(), "textured or nested emitter parameters are not supported");
-  if (props.has("radiance") && props.find("radiance")->kind == Prop::Kind::Texture)
-    props.fail(*props.find("radiance"), "textured radiance is not supported");
-  const Color L = props.getColor("radiance", Color(1.0f));
-  if (!L.isFinite() || L.r < 0 || L.g < 0 || L.b < 0) failAt(el, "radiance must be finite and non-negative");
+  if (!nested.empty()) failAt(*nested.front(), "nested emitter parameters are not supported");
+  AreaEmission out;
+  if (props.has("radiance") && (props.find("radiance")->kind == Prop::Kind::Texture ||
+                                props.find("radiance")->kind == Prop::Kind::Ref)) {
+    out.texture = optTexture(props, "radiance");
+    out.radiance = Color(1.0f);  // marks the mesh as emitting; Le comes from the texture
+  } else {
+    out.radiance = props.getColor("radiance", Color(1.0f));
+    if (!out.radiance.isFinite() || out.radiance.r < 0 || out.radiance.g < 0 || out.radiance.b < 0)
+      failAt(el, "radiance must be finite and non-negative");
+  }
   props.ignore({"sampling_weight"});
   props.checkAllUsed();
-  return L;
+  return out;
 }
 
 void Loader::parseEmitter(const XmlElement& el) {

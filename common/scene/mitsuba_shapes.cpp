@@ -2,6 +2,7 @@
 // transformed object-space normal) even under mirroring transforms; triangle meshes take their geometric
 // normal from world-space winding, as Mitsuba's meshes do.
 #include <filesystem>
+#include <limits>
 
 #include "common/scene/mesh_readers.h"
 #include "common/scene/mesh_utils.h"
@@ -20,6 +21,7 @@ void Loader::parseShape(const XmlElement& el) {
   MeshDesc mesh;
   Transform toWorld = props.optTransform("to_world").value_or(Transform());
   bool analytic = true;
+  bool serializedFaceNormals = false;  // the serialized record's face-normals flag
   if (type == "obj" || type == "ply") {
     analytic = false;
     const auto file = props.optString("filename");
@@ -32,6 +34,20 @@ void Loader::parseShape(const XmlElement& el) {
     }
     mesh.name = std::filesystem::path(*file).filename().string() + " (" + where + ")";
     props.ignore({"collapse"});
+  } else if (type == "serialized") {
+    analytic = false;
+    const auto file = props.optString("filename");
+    if (!file) failAt(el, "serialized shape needs a filename");
+    const std::string path = resolveFile(*props.find("filename")->el, *file, "mesh file");
+    const long long index = props.getInt("shape_index", 0);
+    if (index < 0 || index > std::numeric_limits<int>::max())
+      props.fail(*props.find("shape_index"), "shape_index must be a non-negative integer");
+    try {
+      mesh = readSerialized(path, int(index), &serializedFaceNormals);
+    } catch (const SceneError& e) {
+      failAt(el, std::string("cannot load mesh: ") + e.what());
+    }
+    mesh.name = std::filesystem::path(*file).filename().string() + "#" + std::to_string(index) + " (" + where + ")";
   } else if (type == "rectangle") {
     mesh = makeRectangle();
   } else if (type == "cube") {
@@ -45,7 +61,7 @@ void Loader::parseShape(const XmlElement& el) {
     if (!(radius > 0)) props.fail(*props.find("radius"), "radius must be positive");
     toWorld = toWorld * Transform::translate(center) * Transform::scale(Vec3(float(radius)));
   } else {
-    failAt(el, "unknown or unsupported shape type '" + type + "' (supported: obj, ply, rectangle, cube, disk, sphere)");
+    failAt(el, "unknown or unsupported shape type '" + type + "' (supported: obj, ply, serialized, rectangle, cube, disk, sphere)");
   }
   if (mesh.name.empty()) mesh.name = type + " at " + where;
   if (mesh.indices.empty()) failAt(el, "the mesh has no triangles");
@@ -59,7 +75,7 @@ void Loader::parseShape(const XmlElement& el) {
   } catch (const std::exception& e) {
     failAt(el, e.what());
   }
-  const bool faceNormals = props.getBool("face_normals", false);  // also on sphere: our extension
+  const bool faceNormals = props.getBool("face_normals", false) || serializedFaceNormals;  // also on sphere: our extension
   if (faceNormals) mesh.normals.clear();
   else if (!analytic && mesh.normals.empty()) computeSmoothNormals(mesh);  // as Mitsuba does for meshes
   if (props.getBool("flip_normals", false)) flipMesh(mesh);
@@ -80,7 +96,9 @@ void Loader::parseShape(const XmlElement& el) {
       }
     } else if (n->name == "emitter") {
       if (mesh.emission) failAt(*n, "the shape already has an emitter");
-      mesh.emission = parseAreaEmitter(*n);
+      const AreaEmission e = parseAreaEmitter(*n);
+      mesh.emission = e.radiance;
+      mesh.emissionTexture = e.texture;
     } else {
       failAt(*n, "unsupported element inside " + describe(el));
     }

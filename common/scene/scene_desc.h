@@ -14,9 +14,13 @@
 
 namespace mlt {
 
-// A reflectance that may vary over the surface: constant, image (PNG/JPEG), or checkerboard.
+// A colour that may vary over the surface: constant, image (PNG/JPEG), or checkerboard. Evaluated at the
+// hit's uv by the BSDF or emitter that owns it. A Color converts to a constant texture.
 struct TextureDesc {
   enum class Type { Constant, Bitmap, Checkerboard };
+  TextureDesc() = default;
+  TextureDesc(Color c) : value(c) {}  // NOLINT: implicit, a constant colour is a constant texture
+  bool isConstant() const { return type == Type::Constant; }
   Type type = Type::Constant;
   Color value{0.5f};              // Constant
   std::string filename;           // Bitmap: absolute path, already checked to exist
@@ -43,12 +47,13 @@ struct BsdfDesc {
   Type type = Type::Diffuse;
   std::string id;                 // for error messages: the XML id or "<anonymous bsdf at file:line>"
   TextureDesc reflectance;        // diffuse / plastic's diffuse_reflectance
-  Color specularReflectance{1.0f}, specularTransmittance{1.0f};
+  TextureDesc specularReflectance{Color(1.0f)}, specularTransmittance{Color(1.0f)};
   float intIOR = 1.5046f, extIOR = 1.000277f;
   Color eta{0.0f}, k{1.0f};       // conductor; eta == 0 and k == 1 with `mirror` = true: ideal mirror
   bool mirror = false;            // Mitsuba's material="none": reflect everything (F = 1)
   MicrofacetType distribution = MicrofacetType::Beckmann;
   float alpha = 0.1f;             // roughness (isotropic)
+  std::optional<TextureDesc> alphaTexture;  // roughconductor / roughdielectric: alpha = luminance at uv
   bool nonlinear = false;         // plastic: Mitsuba's nonlinear internal scattering
   int nested = -1;                // TwoSided: index into SceneDesc::bsdfs
 };
@@ -62,6 +67,9 @@ struct MeshDesc {
   std::vector<uint32_t> indices;   // 3 per triangle, counter-clockwise = front (geometric normal side)
   int bsdf = -1;                   // index into SceneDesc::bsdfs
   std::optional<Color> emission;   // area emitter radiance Le (W / (m^2 sr)), emitted on the front side
+  // A textured radiance: Le(uv) from this texture at the point's uv (emission then only marks the mesh as
+  // emitting). Light selection uses the texture's average.
+  std::optional<TextureDesc> emissionTexture;
 };
 
 struct LightDesc {

@@ -16,7 +16,7 @@
 
 #include "common/io/exr_io.h"
 #include "common/methods/chain_report.h"
-#include "common/scene/mitsuba_loader.h"
+#include "common/scene/scene_loader.h"
 #include "tools/cli/commands.h"
 #include "tools/eval/harness.h"
 
@@ -229,7 +229,7 @@ CommandRun setupEval(CLI::App& sub) {
       es.name = std::filesystem::path(path).stem().string();
       for (const auto& other : cfg.scenes)
         if (other.name == es.name) throw std::invalid_argument("--scenes: two scenes named '" + es.name + "'");
-      es.desc = loadMitsubaScene(path, defines);
+      es.desc = loadScene(path, defines);
       cfg.scenes.push_back(std::move(es));
     }
     for (const std::string& m : splitCommas(o->methods)) cfg.methods.push_back(eval::parseMethodSpec(m));

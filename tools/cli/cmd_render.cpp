@@ -1,4 +1,4 @@
-// `mltfarm render SCENE.xml ... -o OUT.exr`: renders a scene and writes OUT.exr (with metadata) and
+// `mltfarm render SCENE.xml|SCENE.pbrt ... -o OUT.exr`: renders a scene and writes OUT.exr (with metadata) and
 // OUT.png. By default through the local farm (a coordinator plus worker processes on loopback,
 // tools/cli/farm_render.h); --in-process renders in this process. Both call the same job API.
 #include <chrono>

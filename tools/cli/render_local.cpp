@@ -23,7 +23,7 @@
 #include "common/job/sample_job.h"
 #include "common/methods/chain_report.h"
 #include "common/render/render_scene.h"
-#include "common/scene/mitsuba_loader.h"
+#include "common/scene/scene_loader.h"
 #include "common/scene/scene_hash.h"
 #include "tools/cli/progress.h"
 
@@ -191,7 +191,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
       throw std::runtime_error(options.outExr + ": output directory " + dir.string() + " does not exist");
   }
   // ---- Scene ----------------------------------------------------------------------------------------
-  SceneDesc desc = loadMitsubaScene(options.scenePath, options.defines);
+  SceneDesc desc = loadScene(options.scenePath, options.defines);
   for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   RenderSettings settings = options.settings;
   if (settings.width < 0 || settings.height < 0) throw std::invalid_argument("--width/--height must be positive");

@@ -1,0 +1,25 @@
+#include "common/scene/scene_loader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+#include "common/scene/mitsuba_loader.h"
+#include "common/scene/pbrt_loader.h"
+
+namespace mlt {
+
+bool isPbrtScene(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".pbrt";
+}
+
+SceneDesc loadScene(const std::string& path, const std::map<std::string, std::string>& defines) {
+  if (!isPbrtScene(path)) return loadMitsubaScene(path, defines);
+  if (!defines.empty())
+    throw SceneError(path, 0, "-D " + defines.begin()->first + "=...: parameters apply to Mitsuba scenes only");
+  return loadPbrtScene(path);
+}
+
+}  // namespace mlt
