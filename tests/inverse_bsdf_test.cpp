@@ -34,27 +34,27 @@ std::vector<NamedBsdf> everyBsdf() {
   const Color goldEta(0.143f, 0.374f, 1.442f), goldK(3.983f, 2.385f, 1.603f);
   std::vector<NamedBsdf> v;
   v.push_back({"diffuse", makeDiffuse(constant(0.7f))});
-  v.push_back({"dielectric_1.5", makeDielectric(1.5f, Color(1.0f), Color(1.0f))});
-  v.push_back({"dielectric_0.75", makeDielectric(0.75f, Color(1.0f), Color(1.0f))});
-  v.push_back({"thin_dielectric", makeThinDielectric(1.5f, Color(1.0f), Color(1.0f))});
-  v.push_back({"conductor_gold", makeConductor(goldEta, goldK, false, Color(1.0f))});
-  v.push_back({"conductor_mirror", makeConductor(Color(0.0f), Color(1.0f), true, Color(1.0f))});
-  v.push_back({"rough_conductor_ggx_0.3", makeRoughConductor(MicrofacetType::GGX, 0.3f, goldEta, goldK, false, Color(1.0f))});
-  v.push_back({"rough_conductor_ggx_0.05", makeRoughConductor(MicrofacetType::GGX, 0.05f, goldEta, goldK, false, Color(1.0f))});
+  v.push_back({"dielectric_1.5", makeDielectric(1.5f, constant(1.0f), constant(1.0f))});
+  v.push_back({"dielectric_0.75", makeDielectric(0.75f, constant(1.0f), constant(1.0f))});
+  v.push_back({"thin_dielectric", makeThinDielectric(1.5f, constant(1.0f), constant(1.0f))});
+  v.push_back({"conductor_gold", makeConductor(goldEta, goldK, false, constant(1.0f))});
+  v.push_back({"conductor_mirror", makeConductor(Color(0.0f), Color(1.0f), true, constant(1.0f))});
+  v.push_back({"rough_conductor_ggx_0.3", makeRoughConductor(MicrofacetType::GGX, 0.3f, nullptr, goldEta, goldK, false, constant(1.0f))});
+  v.push_back({"rough_conductor_ggx_0.05", makeRoughConductor(MicrofacetType::GGX, 0.05f, nullptr, goldEta, goldK, false, constant(1.0f))});
   v.push_back({"rough_conductor_beckmann_0.2",
-               makeRoughConductor(MicrofacetType::Beckmann, 0.2f, goldEta, goldK, false, Color(1.0f))});
-  v.push_back({"rough_dielectric_ggx_0.3", makeRoughDielectric(MicrofacetType::GGX, 0.3f, 1.5f, Color(1.0f), Color(1.0f))});
+               makeRoughConductor(MicrofacetType::Beckmann, 0.2f, nullptr, goldEta, goldK, false, constant(1.0f))});
+  v.push_back({"rough_dielectric_ggx_0.3", makeRoughDielectric(MicrofacetType::GGX, 0.3f, nullptr, 1.5f, constant(1.0f), constant(1.0f))});
   v.push_back({"rough_dielectric_beckmann_0.2",
-               makeRoughDielectric(MicrofacetType::Beckmann, 0.2f, 1.33f, Color(1.0f), Color(1.0f))});
-  v.push_back({"plastic", makePlastic(1.5f, constant(0.5f), Color(1.0f), false)});
-  v.push_back({"rough_plastic_ggx_0.2", makeRoughPlastic(MicrofacetType::GGX, 0.2f, 1.5f, constant(0.5f), Color(1.0f), false)});
+               makeRoughDielectric(MicrofacetType::Beckmann, 0.2f, nullptr, 1.33f, constant(1.0f), constant(1.0f))});
+  v.push_back({"plastic", makePlastic(1.5f, constant(0.5f), constant(1.0f), false)});
+  v.push_back({"rough_plastic_ggx_0.2", makeRoughPlastic(MicrofacetType::GGX, 0.2f, 1.5f, constant(0.5f), constant(1.0f), false)});
   v.push_back({"rough_plastic_beckmann_0.3",
-               makeRoughPlastic(MicrofacetType::Beckmann, 0.3f, 1.5f, constant(0.3f), Color(1.0f), true)});
+               makeRoughPlastic(MicrofacetType::Beckmann, 0.3f, 1.5f, constant(0.3f), constant(1.0f), true)});
   v.push_back({"twosided_diffuse", makeTwoSided(makeDiffuse(constant(0.7f)))});
   v.push_back({"twosided_rough_plastic",
-               makeTwoSided(makeRoughPlastic(MicrofacetType::GGX, 0.2f, 1.5f, constant(0.5f), Color(1.0f), false))});
+               makeTwoSided(makeRoughPlastic(MicrofacetType::GGX, 0.2f, 1.5f, constant(0.5f), constant(1.0f), false))});
   v.push_back({"twosided_rough_conductor",
-               makeTwoSided(makeRoughConductor(MicrofacetType::GGX, 0.3f, goldEta, goldK, false, Color(1.0f)))});
+               makeTwoSided(makeRoughConductor(MicrofacetType::GGX, 0.3f, nullptr, goldEta, goldK, false, constant(1.0f)))});
   return v;
 }
 

@@ -74,10 +74,10 @@ TEST(InverseJacobian, BsdfDirectionsAreTheCdfOfTheirPdf) {
   };
   const std::vector<Case> cases = {
       {"diffuse", makeDiffuse(constant(0.5f)), false},
-      {"rough_conductor_ggx", makeRoughConductor(MicrofacetType::GGX, 0.3f, eta, k, false, Color(1.0f)), false},
-      {"rough_conductor_beckmann", makeRoughConductor(MicrofacetType::Beckmann, 0.25f, eta, k, false, Color(1.0f)), false},
-      {"rough_dielectric_ggx", makeRoughDielectric(MicrofacetType::GGX, 0.3f, 1.5f, Color(1.0f), Color(1.0f)), true},
-      {"rough_dielectric_beckmann", makeRoughDielectric(MicrofacetType::Beckmann, 0.3f, 1.33f, Color(1.0f), Color(1.0f)), true}};
+      {"rough_conductor_ggx", makeRoughConductor(MicrofacetType::GGX, 0.3f, nullptr, eta, k, false, constant(1.0f)), false},
+      {"rough_conductor_beckmann", makeRoughConductor(MicrofacetType::Beckmann, 0.25f, nullptr, eta, k, false, constant(1.0f)), false},
+      {"rough_dielectric_ggx", makeRoughDielectric(MicrofacetType::GGX, 0.3f, nullptr, 1.5f, constant(1.0f), constant(1.0f)), true},
+      {"rough_dielectric_beckmann", makeRoughDielectric(MicrofacetType::Beckmann, 0.3f, nullptr, 1.33f, constant(1.0f), constant(1.0f)), true}};
   const BsdfQuery q{Vec2(0.5f, 0.5f), TransportMode::Radiance};
   for (const Case& c : cases) {
     Pcg32 rng(61, 1);
