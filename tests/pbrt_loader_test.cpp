@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/support/temp_dir.h"
 #include "common/integrators/evaluators.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
@@ -27,30 +28,6 @@ namespace fs = std::filesystem;
 
 namespace mlt {
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("mlt_pbrt_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& content) const {
-    const fs::path p = path_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 const std::string kCamera = "Scale -1 1 1\nLookAt 0 1 5  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n";
 

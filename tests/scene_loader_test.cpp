@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/support/temp_dir.h"
 #include "common/core/rng.h"
 #include "common/core/sha256.h"
 #include "common/scene/mesh_readers.h"
@@ -23,29 +24,6 @@ namespace {
 const std::string kData = std::string(MLTFARM_SOURCE_DIR) + "/tests/data/scenes";
 const std::string kScenes = std::string(MLTFARM_SOURCE_DIR) + "/scenes";
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("mlt_loader_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& content) const {
-    const fs::path p = path_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // Line 1 is <scene ...>, so the body starts on line 2.
 std::string sceneXml(const std::string& body, const std::string& version = "3.0.0") {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/support/temp_dir.h"
 #include "common/bsdf/make_bsdf.h"
 #include "common/bsdf/texture.h"
 #include "common/core/rng.h"
@@ -24,27 +25,6 @@ namespace fs = std::filesystem;
 
 namespace mlt {
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("mlt_textured_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& content) const {
-    std::ofstream(path_ / name, std::ios::binary) << content;
-    return (path_ / name).string();
-  }
-
- private:
-  fs::path path_;
-};
 
 SceneDesc loadBody(const TempDir& d, const std::string& body, const std::string& version = "3.0.0") {
   return loadMitsubaScene(d.write("scene.xml", "<scene version=\"" + version + "\">\n" + body + "</scene>\n"));
