@@ -164,12 +164,19 @@ void checkBootstrapFits(const ChainJobSpec& spec, const RenderSettings& b, const
 
 }  // namespace
 
-void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& s) {
-  if (s.method != spec.name())
-    throw std::invalid_argument("settings: method is '" + s.method + "', not '" + spec.name() + "'");
+void validateChainWorkSettings(const RenderSettings& s) {
+  if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
+    throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
+  if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
   if (s.bootstrapSamples != 0 && s.bootstrapSamples < 2)
     throw std::invalid_argument("settings: bootstrap samples must be >= 2 (or 0: automatic), got " +
                                 std::to_string(s.bootstrapSamples));
+}
+
+void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& s) {
+  if (s.method != spec.name())
+    throw std::invalid_argument("settings: method is '" + s.method + "', not '" + spec.name() + "'");
+  validateChainWorkSettings(s);
   if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
   if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");

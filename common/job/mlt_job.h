@@ -117,6 +117,9 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
 
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.
+// The chain-family settings every Markov chain method reads (mutations per pixel > 0 and finite, chains
+// >= 0, bootstrap samples 0 or >= 2); throws std::invalid_argument naming the setting.
+void validateChainWorkSettings(const RenderSettings& settings);
 void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& settings);
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
                                              const RenderSettings& settings);

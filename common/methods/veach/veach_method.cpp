@@ -47,12 +47,7 @@ veach::MutationSettings VeachMltMethod::mutationSettings(const RenderSettings& s
 
 void VeachMltMethod::validate(const RenderSettings& s) const {
   RenderMethod::validate(s);
-  if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
-    throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
-  if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
-  if (s.bootstrapSamples != 0 && s.bootstrapSamples < 2)
-    throw std::invalid_argument("settings: bootstrap samples must be >= 2 (or 0: automatic), got " +
-                                std::to_string(s.bootstrapSamples));
+  validateChainWorkSettings(s);
   if (s.separateDirect) throw std::invalid_argument("settings: veach-mlt does not support separateDirect yet");
   const veach::MutationSettings m = mutationSettings(s);
   double sum = 0;
