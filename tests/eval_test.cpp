@@ -207,6 +207,7 @@ TEST(EvalCsv, RunsRoundTrip) {
   runs[0].flags = {"outlier:x", "stuck:k=3"};
   runs[1].markovChain = true;
   runs[1].acceptance = 0.25;
+  runs[1].planSeconds = 0.125;
   std::stringstream ss;
   writeRunsCsv(ss, runs);
   auto back = readRunsCsv(ss);
@@ -214,6 +215,8 @@ TEST(EvalCsv, RunsRoundTrip) {
   EXPECT_EQ(back[0].method, runs[0].method);
   EXPECT_EQ(back[0].flags, runs[0].flags);
   EXPECT_DOUBLE_EQ(back[1].acceptance, 0.25);
+  EXPECT_DOUBLE_EQ(back[1].planSeconds, 0.125);
+  EXPECT_LT(back[0].planSeconds, 0);  // not measured round-trips as not measured
   EXPECT_FALSE(back[0].markovChain);
   EXPECT_NEAR(back[2].metrics.relMSE, runs[2].metrics.relMSE, 1e-8 * runs[2].metrics.relMSE);
   std::stringstream bad("scene,method\n");

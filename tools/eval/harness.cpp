@@ -94,6 +94,7 @@ struct TimeModel {
 struct RunOutput {
   std::vector<Color> image;
   double seconds = 0;
+  double planSeconds = -1;  // -1: not measured (farm runs)
   uint64_t samples = 0;
   ChainStats stats;
   int chains = 0, stuckChains = 0;
@@ -129,6 +130,7 @@ RunOutput renderOnce(const EvalConfig& cfg, const EvalScene& es, const RenderSce
   JobRun run = runJobInProcess(scene, settings, cfg.threads);
   out.image = std::move(run.image);
   out.seconds = run.seconds;
+  out.planSeconds = run.planSeconds;
   out.samples = run.merged.samples;
   out.stats = run.merged.stats;
   if (isMarkovChainMethod(settings.method)) {
@@ -215,6 +217,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
       rec.run = run;
       rec.seed = rs.seed;
       rec.seconds = out.seconds;
+      rec.planSeconds = out.planSeconds;
       rec.work = isMarkovChainMethod(ms.method) ? rs.mutationsPerPixel : double(rs.spp);
       rec.samples = out.samples;
       rec.metrics = computeMetrics(out.image, ref.image, cfg.eps);

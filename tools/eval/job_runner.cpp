@@ -21,6 +21,7 @@ JobRun runJobInProcess(const RenderScene& scene, const RenderSettings& settings,
   JobRun run;
   const auto start = Clock::now();
   run.plan = planJob(scene, settings);
+  run.planSeconds = std::chrono::duration<double>(Clock::now() - start).count();
   const JobPlan& plan = run.plan;
   const size_t nUnits = plan.units.size();
   run.unitStats.reserve(nUnits);

@@ -16,6 +16,7 @@ struct JobRun {
   PartialResult merged;
   std::vector<Color> image;            // developed linear RGB
   double seconds = 0;                  // wall time of planning (bootstrap) + all units + development
+  double planSeconds = 0;              // of which planning (the Markov chain methods' bootstrap)
   std::vector<ChainStats> unitStats;   // per work unit, in index order (chains: one per chain)
   std::vector<uint64_t> unitSamples;   // per work unit: mutations (chains) or pixel samples
 };

@@ -46,7 +46,7 @@ std::vector<std::string> csvSplit(const std::string& line) {
 
 static const char* kRunsHeader =
     "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
-    "acceptance,chains,stuck_chains,non_finite,flags";
+    "acceptance,chains,stuck_chains,non_finite,flags,plan_seconds";
 
 static std::string joinFlags(const std::vector<std::string>& flags) {
   std::string s;
@@ -58,11 +58,12 @@ void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
   os << kRunsHeader << "\n";
   for (const RunRecord& r : runs) {
     const ImageMetrics& m = r.metrics;
-    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{}\n",
+    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{}\n",
                       csvQuote(r.scene), csvQuote(r.method), r.mode, r.budgetIndex, r.budget, r.run, r.seed,
                       r.seconds, r.work, r.samples, m.relMSE, m.mse, m.mae, m.meanErr,
                       r.markovChain && r.acceptance >= 0 ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
-                      r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)));
+                      r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)),
+                      r.planSeconds >= 0 ? fmt::format("{:.6f}", r.planSeconds) : std::string());
   }
 }
 
@@ -97,8 +98,8 @@ std::vector<RunRecord> readRunsCsv(std::istream& is) {
     ++lineNo;
     if (line.empty()) continue;
     auto f = csvSplit(line);
-    if (f.size() != 19)
-      throw std::runtime_error(fmt::format("runs.csv line {}: expected 19 fields, got {}", lineNo, f.size()));
+    if (f.size() != 20)
+      throw std::runtime_error(fmt::format("runs.csv line {}: expected 20 fields, got {}", lineNo, f.size()));
     try {
       RunRecord r;
       r.scene = f[0];
@@ -123,6 +124,7 @@ std::vector<RunRecord> readRunsCsv(std::istream& is) {
       std::stringstream flags(f[18]);
       for (std::string flag; std::getline(flags, flag, ';');)
         if (!flag.empty()) r.flags.push_back(flag);
+      r.planSeconds = f[19].empty() ? -1 : std::stod(f[19]);
       runs.push_back(std::move(r));
     } catch (const std::logic_error& e) {
       throw std::runtime_error(fmt::format("runs.csv line {}: bad number ({})", lineNo, e.what()));

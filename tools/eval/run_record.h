@@ -20,6 +20,7 @@ struct RunRecord {
   int run = 0;
   uint64_t seed = 0;
   double seconds = 0;            // real wall time of the run (bootstrap included)
+  double planSeconds = -1;       // of which planning (the bootstrap); -1 = not measured (farm runs)
   double work = 0;               // spp (sample methods) or mutations per pixel (chains) requested
   uint64_t samples = 0;          // pixel samples or mutations actually done
   ImageMetrics metrics;

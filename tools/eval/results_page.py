@@ -1,0 +1,267 @@
+#!/usr/bin/python3
+"""Combines several `mltfarm eval` output directories into one results page (issue 9 item 6).
+
+usage: /usr/bin/python3 tools/eval/results_page.py --out DIR --page PAGE.md [--header FILE] EVALDIR...
+
+Each EVALDIR holds what one `mltfarm eval` call wrote (runs.csv, acceptance.csv, refs.csv,
+calibration.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
+method at 4 and 16 s, the leading methods at 64 s); their rows are pooled, budget indices are renumbered
+by budget value, DIR gets the pooled tables and the charts (tools/eval/charts.py), and PAGE.md gets, per
+scene, the reference's own noise, relMSE per method and budget, brightness per run, throughput, bootstrap
+share and stability flags, followed by a check of issue 9's targets. Nothing here measures anything: it
+only reads the tables.
+"""
+import argparse
+import csv
+import math
+import os
+import shutil
+import subprocess
+import sys
+from collections import OrderedDict, defaultdict
+
+HARD_SCENES = ("caustic-mirror", "door-ajar", "glossy-plates")
+CHAIN_METHODS = ("pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt", "veach-mlt")
+
+
+def read_csv(path):
+    if not os.path.exists(path):
+        return [], None
+    with open(path, newline="") as f:
+        r = csv.DictReader(f)
+        return list(r), r.fieldnames
+
+
+def write_csv(path, rows, fields):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def mean_std(values):
+    n = len(values)
+    m = sum(values) / n
+    s = math.sqrt(sum((v - m) ** 2 for v in values) / (n - 1)) if n > 1 else 0.0
+    return m, s
+
+
+def fmt_e(x):
+    return "%.2e" % x if x < 0.01 or x >= 100 else "%.3g" % x
+
+
+def pct(x):
+    return "%+.2f%%" % (100 * x)
+
+
+def pool(dirs, out):
+    """Pools the tables of every eval directory into out/; returns (runs, refs, acceptance)."""
+    runs, acc, refs, cal = [], [], OrderedDict(), []
+    fields = {}
+    for d in dirs:
+        r, f = read_csv(os.path.join(d, "runs.csv"))
+        if not r:
+            sys.exit("results_page.py: %s has no runs" % os.path.join(d, "runs.csv"))
+        fields["runs"] = f
+        runs += r
+        a, f = read_csv(os.path.join(d, "acceptance.csv"))
+        if f:
+            fields["acc"] = f
+        acc += a
+        rr, f = read_csv(os.path.join(d, "refs.csv"))
+        fields["refs"] = f
+        for x in rr:
+            refs.setdefault(x["scene"], x)
+        c, f = read_csv(os.path.join(d, "calibration.csv"))
+        if f:
+            fields["cal"] = f
+        cal += c
+    budgets = sorted({float(r["budget"]) for r in runs})
+    index = {b: i for i, b in enumerate(budgets)}
+    for rows in (runs, acc):
+        for r in rows:
+            r["budget_index"] = str(index[float(r["budget"])])
+    os.makedirs(out, exist_ok=True)
+    write_csv(os.path.join(out, "runs.csv"), runs, fields["runs"])
+    if "acc" in fields:
+        write_csv(os.path.join(out, "acceptance.csv"), acc, fields["acc"])
+    write_csv(os.path.join(out, "refs.csv"), list(refs.values()), fields["refs"])
+    if "cal" in fields:
+        write_csv(os.path.join(out, "calibration.csv"), cal, fields["cal"])
+    return runs, refs, budgets
+
+
+class Group:
+    """The runs of one (scene, method, budget)."""
+
+    def __init__(self, rows):
+        self.rows = rows
+        self.rel = [float(r["relMSE"]) for r in rows]
+        self.mean_err = [float(r["meanErr"]) for r in rows]
+        self.seconds = [float(r["seconds"]) for r in rows]
+        self.work = [float(r["work"]) for r in rows]
+        self.samples = [float(r["samples"]) for r in rows]
+        plan = [float(r["plan_seconds"]) for r in rows if r.get("plan_seconds")]
+        self.plan_share = [p / s for p, s in zip(plan, self.seconds)] if plan else []
+        self.flagged = [r for r in rows if r["flags"]]
+
+    def rel_ms(self):
+        return mean_std(self.rel)
+
+    def throughput(self):  # samples or mutations per second of wall time (bootstrap included)
+        return sum(self.samples) / sum(self.seconds)
+
+
+def scene_section(scene, runs, ref, budgets, out_rel):
+    lines = ["## %s" % scene, ""]
+    groups = OrderedDict()
+    for r in runs:
+        groups.setdefault(r["method"], OrderedDict())
+    by = defaultdict(list)
+    for r in runs:
+        by[(r["method"], float(r["budget"]))].append(r)
+    g = {k: Group(v) for k, v in by.items()}
+    methods = list(groups)
+    if ref:
+        lines.append("Reference: %s; its own noise: relMSE floor %s, mean brightness +-%.3f%% (1 std. error)."
+                     % (ref["source"], fmt_e(float(ref["relMSE_floor"])), 100 * float(ref["mean_rel_stderr"])))
+        lines.append("")
+    lines.append("![relMSE against time, %s](%s/error_time_%s.png)" % (scene, out_rel, scene))
+    lines.append("")
+    lines.append("relMSE, mean +- std over runs (runs); lower is better; **bold** = best at that budget.")
+    lines.append("")
+    lines.append("| method | " + " | ".join("%g s" % b for b in budgets) + " |")
+    lines.append("|---|" + "---|" * len(budgets))
+    best = {}
+    for b in budgets:
+        cand = [(g[(m, b)].rel_ms()[0], m) for m in methods if (m, b) in g]
+        if cand:
+            best[b] = min(cand)[1]
+    for m in methods:
+        cells = []
+        for b in budgets:
+            if (m, b) not in g:
+                cells.append("-")
+                continue
+            mu, sd = g[(m, b)].rel_ms()
+            cell = "%s +- %s (%d)" % (fmt_e(mu), fmt_e(sd), len(g[(m, b)].rel))
+            cells.append("**%s**" % cell if best.get(b) == m else cell)
+        lines.append("| %s | %s |" % (m, " | ".join(cells)))
+    lines.append("")
+    # Detail at 16 s (or the closest budget every method ran).
+    common = [b for b in budgets if all((m, b) in g for m in methods)]
+    bd = 16.0 if 16.0 in common else (common[-1] if common else budgets[0])
+    lines.append("At %g s: brightness (image mean's relative error against the reference) per run, work, "
+                 "throughput (wall time incl. bootstrap), bootstrap share of the job, flagged runs." % bd)
+    lines.append("")
+    lines.append("| method | brightness mean over runs | worst run | per run | work/px | samples or mutations/s "
+                 "| bootstrap share | flagged |")
+    lines.append("|---|---|---|---|---|---|---|---|")
+    for m in methods:
+        if (m, bd) not in g:
+            continue
+        x = g[(m, bd)]
+        mu, _ = mean_std(x.mean_err)
+        worst = max(x.mean_err, key=abs)
+        share = "%.1f%%" % (100 * max(x.plan_share)) if x.plan_share and m in CHAIN_METHODS else "-"
+        flags = "; ".join(sorted({f for r in x.flagged for f in r["flags"].split(";")}))
+        lines.append("| %s | %s | %s | %s | %.0f | %.3g M | %s | %d/%d %s |" % (
+            m, pct(mu), pct(worst), ", ".join("%+.2f" % (100 * e) for e in x.mean_err), mean_std(x.work)[0],
+            x.throughput() / 1e6, share, len(x.flagged), len(x.rows), flags))
+    lines.append("")
+    lines.append("![run-to-run spread, %s](%s/spread_%s.png)" % (scene, out_rel, scene))
+    lines.append("")
+    return lines, g, methods
+
+
+def targets_section(all_groups, refs, budgets):
+    lines = ["## Issue 9's targets, checked against these runs", ""]
+    # 1. Brightness.
+    lines.append("**Brightness** (target: mean over seeds within 0.1%, every single run within 0.3% at 16 s). "
+                 "The reference's own brightness standard error is part of every figure.")
+    lines.append("")
+    lines.append("| scene | method | mean over seeds | worst single run | reference +-1 s.e. | met? |")
+    lines.append("|---|---|---|---|---|---|")
+    for scene, (g, methods) in all_groups.items():
+        se = float(refs[scene]["mean_rel_stderr"]) if scene in refs else 0.0
+        for m in methods:
+            if (m, 16.0) not in g:
+                continue
+            x = g[(m, 16.0)]
+            mu, _ = mean_std(x.mean_err)
+            worst = max(x.mean_err, key=abs)
+            ok = abs(mu) <= 0.001 + 2 * se and abs(worst) <= 0.003 + 2 * se
+            lines.append("| %s | %s | %s | %s | %.3f%% | %s |" % (scene, m, pct(mu), pct(worst), 100 * se,
+                                                                 "yes" if ok else "no"))
+    lines.append("")
+    # 2. mmlt vs bdpt on the Cornell box.
+    if "cornell-box" in all_groups:
+        g, _ = all_groups["cornell-box"]
+        lines.append("**Cornell box, mmlt against bdpt** (target: mmlt no worse at 16 s):")
+        lines.append("")
+        for b in budgets:
+            if ("mmlt", b) in g and ("bdpt", b) in g:
+                r = g[("mmlt", b)].rel_ms()[0] / g[("bdpt", b)].rel_ms()[0]
+                lines.append("- %g s: mmlt / bdpt relMSE = %.2f (%s)" % (b, r, "met" if r <= 1 else "not met"))
+        lines.append("")
+    # 3. Hard scenes: best chain vs pt and bdpt.
+    lines.append("**Hard scenes** (target: the best chain method at least 2x lower relMSE than both pt and "
+                 "bdpt at equal time):")
+    lines.append("")
+    lines.append("| scene | budget | best chain method | its relMSE | pt | bdpt | ratio to the better of pt/bdpt | met? |")
+    lines.append("|---|---|---|---|---|---|---|---|")
+    for scene in HARD_SCENES:
+        if scene not in all_groups:
+            continue
+        g, methods = all_groups[scene]
+        for b in budgets:
+            chains = [(g[(m, b)].rel_ms()[0], m) for m in methods if m in CHAIN_METHODS and (m, b) in g]
+            if not chains or ("pt", b) not in g or ("bdpt", b) not in g:
+                continue
+            e, m = min(chains)
+            pt, bd = g[("pt", b)].rel_ms()[0], g[("bdpt", b)].rel_ms()[0]
+            ratio = min(pt, bd) / e
+            lines.append("| %s | %g s | %s | %s | %s | %s | %.2fx | %s |" % (
+                scene, b, m, fmt_e(e), fmt_e(pt), fmt_e(bd), ratio, "yes" if ratio >= 2 else "no"))
+    lines.append("")
+    # 4. Bootstrap share.
+    shares = [(max(x.plan_share), scene, m, b) for scene, (g, _) in all_groups.items()
+              for (m, b), x in g.items() if m in CHAIN_METHODS and x.plan_share]
+    if shares:
+        s, scene, m, b = max(shares)
+        lines.append("**Bootstrap share** (target: at most 5%% of every job): largest %.1f%% (%s, %s, %g s)."
+                     % (100 * s, scene, m, b))
+        lines.append("")
+    return lines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", required=True, help="directory for the pooled tables and the charts")
+    ap.add_argument("--page", required=True, help="the Markdown page to write")
+    ap.add_argument("--header", help="a Markdown file put at the top of the page")
+    ap.add_argument("dirs", nargs="+", help="mltfarm eval output directories")
+    a = ap.parse_args()
+    runs, refs, budgets = pool(a.dirs, a.out)
+    subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "charts.py"), a.out], check=True)
+    out_rel = os.path.relpath(a.out, os.path.dirname(os.path.abspath(a.page)))
+    lines = []
+    if a.header:
+        with open(a.header) as f:
+            lines += f.read().rstrip("\n").split("\n") + [""]
+    scenes = list(OrderedDict.fromkeys(r["scene"] for r in runs))
+    all_groups = OrderedDict()
+    body = []
+    for scene in scenes:
+        sec, g, methods = scene_section(scene, [r for r in runs if r["scene"] == scene], refs.get(scene),
+                                        budgets, out_rel)
+        all_groups[scene] = (g, methods)
+        body += sec
+    lines += targets_section(all_groups, refs, budgets) + body
+    with open(a.page, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("wrote %s and %s/" % (a.page, a.out))
+
+
+if __name__ == "__main__":
+    main()
