@@ -68,6 +68,8 @@ def main():
     # caustic-mirror at 16 s: best chain = pssmlt (0.0125), better of pt/bdpt = bdpt (0.05): 4x.
     assert "| caustic-mirror | 16 s | pssmlt | 0.0125 | 0.075 | 0.05 | 4.00x | yes |" in text, text
     assert "largest 6.0% (caustic-mirror, mmlt" in text, text
+    assert "**Pick here:** `pssmlt` (lowest relMSE at 16 s" in text, text
+    assert "**Pick here:** `bdpt` (lowest relMSE at 16 s" in text, text  # cornell-box
     for png in ("error_time_cornell-box.png", "spread_caustic-mirror.png"):
         assert os.path.exists(os.path.join(out, png)), png
     print("results_page_test: ok")

@@ -169,6 +169,13 @@ def scene_section(scene, runs, ref, budgets, out_rel):
             m, pct(mu), pct(worst), ", ".join("%+.2f" % (100 * e) for e in x.mean_err), mean_std(x.work)[0],
             x.throughput() / 1e6, share, len(x.flagged), len(x.rows), flags))
     lines.append("")
+    # Which method to pick: the lowest mean relMSE at the detail budget among methods without flagged runs.
+    clean = [(g[(m, bd)].rel_ms()[0], m) for m in methods if (m, bd) in g and not g[(m, bd)].flagged]
+    if clean:
+        e, m = min(clean)
+        lines.append("**Pick here:** `%s` (lowest relMSE at %g s among methods with no flagged run: %s)."
+                     % (m, bd, fmt_e(e)))
+        lines.append("")
     lines.append("![run-to-run spread, %s](%s/spread_%s.png)" % (scene, out_rel, scene))
     lines.append("")
     return lines, g, methods
