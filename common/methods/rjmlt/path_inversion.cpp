@@ -85,6 +85,17 @@ bool traceTechnique(const RenderScene& scene, SampleSource& source, int s, int t
   return true;
 }
 
+void appendMmltSplat(const MmltPath& p, PathContribution& out) {
+  const float w = p.weight * float(mmltTechniqueCount(p.length()));
+  if (!(w > 0)) return;
+  Splat sp;
+  sp.pRaster = p.pRaster;
+  sp.L = p.C * w;
+  sp.s = static_cast<int16_t>(p.s);
+  sp.t = static_cast<int16_t>(p.t);
+  out.splats.push_back(sp);
+}
+
 int mmltTechniqueOf(SampleSource& source, int k) {
   const int n = mmltTechniqueCount(k);
   if (k <= 1) return 0;

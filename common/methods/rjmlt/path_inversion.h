@@ -35,6 +35,7 @@
 
 #include "common/core/rng.h"
 #include "common/integrators/bdpt.h"
+#include "common/integrators/path_evaluator.h"
 #include "common/sampler/sample_source.h"
 
 namespace mlt {
@@ -55,6 +56,10 @@ struct MmltPath {
 // path. False if the technique produces no contribution.
 bool traceTechnique(const RenderScene& scene, SampleSource& source, int s, int t, MisHeuristic heuristic,
                     BdptWorkspace& ws, MmltPath* out);
+
+// Appends the splat MMLT's target makes of p (methods/mmlt/mmlt_method.h: C w(s,t) n, n = the number of
+// techniques of p's length, so that the uniform technique choice sums to bdpt); nothing if C w n is not > 0.
+void appendMmltSplat(const MmltPath& p, PathContribution& out);
 
 // The technique index s that MMLT's target reads for length k (the Connect stream's first coordinate).
 int mmltTechniqueOf(SampleSource& source, int k);

@@ -24,16 +24,7 @@ RjmltState::RjmltState(const RenderScene& scene, KelemenSource& source, int path
 void RjmltState::trace(int s, PathContribution& out) {
   out.clear();
   proposedValid_ = traceTechnique(scene_, source_, s, k_ + 1 - s, heuristic_, ws_, &proposed_);
-  if (!proposedValid_) return;
-  // MMLT's target (methods/mmlt/mmlt_method.h): C(s,t) w(s,t) n, so that the uniform technique choice sums to bdpt.
-  const float w = proposed_.weight * float(n_);
-  if (!(w > 0)) return;
-  Splat sp;
-  sp.pRaster = proposed_.pRaster;
-  sp.L = proposed_.C * w;
-  sp.s = static_cast<int16_t>(s);
-  sp.t = static_cast<int16_t>(k_ + 1 - s);
-  out.splats.push_back(sp);
+  if (proposedValid_) appendMmltSplat(proposed_, out);
 }
 
 double RjmltState::start(PathContribution& out) {

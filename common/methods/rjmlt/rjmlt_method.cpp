@@ -24,18 +24,9 @@ void RjmltTarget::evaluate(SampleSource& source, int pathLength, PathContributio
   out.clear();
   const int k = pathLength;
   if (k < 1) throw std::invalid_argument("rjmlt: path length " + std::to_string(k) + " must be >= 1");
-  const int n = mmltTechniqueCount(k);
   const int s = mmltTechniqueOf(source, k);
   lastValid_ = traceTechnique(scene_, source, s, k + 1 - s, integrator_.heuristic, ws_, &last_);
-  if (!lastValid_) return;
-  const float w = last_.weight * float(n);
-  if (!(w > 0)) return;
-  Splat sp;
-  sp.pRaster = last_.pRaster;
-  sp.L = last_.C * w;
-  sp.s = static_cast<int16_t>(s);
-  sp.t = static_cast<int16_t>(k + 1 - s);
-  out.splats.push_back(sp);
+  if (lastValid_) appendMmltSplat(last_, out);
 }
 
 std::vector<ParamSpec> RjmltMethod::params() const {

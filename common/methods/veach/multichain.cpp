@@ -51,44 +51,20 @@ class MultiChainPerturbation final : public Mutation {
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     const std::vector<int> d = chainEnds(x);
     const int k = x.k();
-    Vec2 r0;
-    if (!space_.raster(x, &r0)) return false;
-    const double R = r2_ * std::exp(-std::log(r2_ / r1_) * rng.uniformDouble());
-    const double phi = 2 * M_PI * rng.uniformDouble();
-    const Vec2 raster(float(r0.x + R * std::cos(phi)), float(r0.y + R * std::sin(phi)));
-    const Camera& cam = space_.scene().camera();
-    if (!(raster.x >= 0 && raster.x < float(cam.width()) && raster.y >= 0 && raster.y < float(cam.height()))) return false;
+    const std::optional<Vec2> raster = perturbRaster(space_, x, rng, r1_, r2_);
+    if (!raster) return false;
     y = x;
     Vec3 dir;
-    y.v[k] = space_.cameraVertex(raster, x.uLens, &dir);
-    int i = k - 1;
+    y.v[k] = space_.cameraVertex(*raster, x.uLens, &dir);
+    int first = k - 1;
     for (size_t c = 0; c < d.size(); ++c) {
       if (c > 0) {
-        // Turn x's direction at d_{c} by theta about a uniform axis.
+        // Turn x's direction at d_{c-1} (toward the light) by theta about a uniform axis.
         const int dv = d[c - 1];
-        const Vec3 wx = normalize(x.v[dv - 1].p - x.v[dv].p);
-        const double theta = theta2_ * std::exp(-std::log(theta2_ / theta1_) * rng.uniformDouble());
-        const double ph = 2 * M_PI * rng.uniformDouble(), st = std::sin(theta);
-        dir = normalize(Frame(wx).toWorld(Vec3(float(st * std::cos(ph)), float(st * std::sin(ph)), float(std::cos(theta)))));
-        i = dv - 1;
+        dir = perturbDirection(x, dv, dv - 1, rng, theta1_, theta2_);
+        first = dv - 1;
       }
-      for (; i >= d[c]; --i) {
-        const PathVertex& prev = y.v[i + 1];
-        std::optional<PathVertex> hit = space_.trace(prev.p, prev.kind == VertexKind::Camera ? Vec3() : prev.ng, dir);
-        if (!hit) return false;
-        if (i > d[c]) {
-          const std::optional<Vec3> next = followLobe(*hit, prev, transmits(x, i), TransportMode::Radiance);
-          if (!next) return false;
-          hit->specular = true;
-          dir = *next;
-        } else if (i == 0) {
-          if (!space_.makeLightVertex(*hit)) return false;
-        } else {
-          if (hit->bsdf->isDelta()) return false;
-          hit->specular = false;
-        }
-        y.v[i] = *hit;
-      }
+      if (!retraceSpecularChain(space_, x, y, first, d[c], -1, dir, TransportMode::Radiance)) return false;
     }
     return true;
   }

@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "common/methods/veach/mutations.h"
+#include "common/render/render_scene.h"
 
 namespace mlt::veach {
 
@@ -52,6 +53,52 @@ double exponentialStepDensity(double s, double s1, double s2) {
   // 1e-4): the support gets 1% slack, the same for T(x -> y) and T(y -> x) (the step is symmetric).
   if (s < s1 * (1 - 1e-2) || s > s2 * (1 + 1e-2)) return 0;
   return 1 / (s * std::log(s2 / s1));
+}
+
+double sampleExponentialStep(Pcg32& rng, double s1, double s2) {
+  return s2 * std::exp(-std::log(s2 / s1) * rng.uniformDouble());
+}
+
+std::optional<Vec2> perturbRaster(const PathSpace& space, const Path& x, Pcg32& rng, double r1, double r2) {
+  Vec2 r0;
+  if (!space.raster(x, &r0)) return std::nullopt;
+  const double R = sampleExponentialStep(rng, r1, r2);
+  const double phi = 2 * M_PI * rng.uniformDouble();
+  const Vec2 raster(float(r0.x + R * std::cos(phi)), float(r0.y + R * std::sin(phi)));
+  const Camera& cam = space.scene().camera();
+  if (!(raster.x >= 0 && raster.x < float(cam.width()) && raster.y >= 0 && raster.y < float(cam.height())))
+    return std::nullopt;
+  return raster;
+}
+
+Vec3 perturbDirection(const Path& x, int at, int toward, Pcg32& rng, double theta1, double theta2) {
+  const Vec3 w = normalize(x.v[toward].p - x.v[at].p);
+  const double theta = sampleExponentialStep(rng, theta1, theta2);
+  const double phi = 2 * M_PI * rng.uniformDouble(), st = std::sin(theta);
+  return normalize(Frame(w).toWorld(Vec3(float(st * std::cos(phi)), float(st * std::sin(phi)), float(std::cos(theta)))));
+}
+
+bool retraceSpecularChain(const PathSpace& space, const Path& x, Path& y, int first, int last, int step, Vec3 dir,
+                          TransportMode mode) {
+  if ((last - first) * step < 0) return false;
+  for (int i = first;; i += step) {
+    const PathVertex& prev = y.v[i - step];
+    std::optional<PathVertex> hit = space.trace(prev.p, prev.kind == VertexKind::Camera ? Vec3() : prev.ng, dir);
+    if (!hit) return false;
+    if (i != last) {
+      const std::optional<Vec3> next = followLobe(*hit, prev, transmits(x, i), mode);
+      if (!next) return false;
+      hit->specular = true;
+      dir = *next;
+    } else if (i == 0) {
+      if (!space.makeLightVertex(*hit)) return false;
+    } else {
+      if (hit->bsdf->isDelta()) return false;
+      hit->specular = false;
+    }
+    y.v[i] = *hit;
+    if (i == last) return true;
+  }
 }
 
 }  // namespace mlt::veach

@@ -72,5 +72,19 @@ std::optional<Vec3> followLobe(const PathVertex& s, const PathVertex& prev, bool
 bool transmits(const Path& x, int i);
 // Exponential step density of Veach's perturbations: s = s2 exp(-ln(s2/s1) u), density 1 / (s ln(s2/s1)).
 double exponentialStepDensity(double s, double s1, double s2);
+// Draws that step (one uniform from rng).
+double sampleExponentialStep(Pcg32& rng, double s1, double s2);
+// The film position of x moved by R (cos phi, sin phi), R an exponential step in [r1, r2], phi uniform
+// (two uniforms); nullopt if x has no film position or the new one leaves the film.
+std::optional<Vec2> perturbRaster(const PathSpace& space, const Path& x, Pcg32& rng, double r1, double r2);
+// x's direction from vertex `at` toward `toward`, turned by theta (an exponential step in [theta1,
+// theta2]) about a uniform axis (two uniforms).
+Vec3 perturbDirection(const Path& x, int at, int toward, Pcg32& rng, double theta1, double theta2);
+// Retraces y's vertices first, first + step, ..., last (step = +1 toward the eye, -1 toward the light)
+// from y.v[first - step] in direction dir: the vertices before `last` follow x's lobes (followLobe in `mode`) and are specular;
+// `last` must be a non-Dirac surface (or, as vertex 0, a light). False if a ray escapes or a lobe or the
+// end condition fails.
+bool retraceSpecularChain(const PathSpace& space, const Path& x, Path& y, int first, int last, int step, Vec3 dir,
+                          TransportMode mode);
 
 }  // namespace mlt::veach

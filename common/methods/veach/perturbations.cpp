@@ -56,32 +56,12 @@ class LensPerturbation final : public Mutation {
 
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     const int k = x.k(), m = eyeChainEnd(x);
-    Vec2 r0;
-    if (!space_.raster(x, &r0)) return false;
-    const double R = r2_ * std::exp(-std::log(r2_ / r1_) * rng.uniformDouble());
-    const double phi = 2 * M_PI * rng.uniformDouble();
-    const Vec2 raster(float(r0.x + R * std::cos(phi)), float(r0.y + R * std::sin(phi)));
-    const Camera& cam = space_.scene().camera();
-    if (!(raster.x >= 0 && raster.x < float(cam.width()) && raster.y >= 0 && raster.y < float(cam.height()))) return false;
+    const std::optional<Vec2> raster = perturbRaster(space_, x, rng, r1_, r2_);
+    if (!raster) return false;
     y = x;
     Vec3 dir;
-    y.v[k] = space_.cameraVertex(raster, x.uLens, &dir);
-    for (int i = k - 1; i >= m; --i) {
-      const PathVertex& prev = y.v[i + 1];
-      std::optional<PathVertex> hit = space_.trace(prev.p, prev.kind == VertexKind::Camera ? Vec3() : prev.ng, dir);
-      if (!hit) return false;
-      if (i > m) {
-        const std::optional<Vec3> next = followLobe(*hit, prev, transmits(x, i), TransportMode::Radiance);
-        if (!next) return false;
-        hit->specular = true;
-        dir = *next;
-      } else {
-        if (hit->bsdf->isDelta()) return false;
-        hit->specular = false;
-      }
-      y.v[i] = *hit;
-    }
-    return true;
+    y.v[k] = space_.cameraVertex(*raster, x.uLens, &dir);
+    return retraceSpecularChain(space_, x, y, k - 1, m, -1, dir, TransportMode::Radiance);
   }
 
   double density(const Path& x, const Path& y) const override {
@@ -119,28 +99,9 @@ class CausticPerturbation final : public Mutation {
 
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     const int k = x.k(), j = causticSource(x);
-    const Vec3 w = normalize(x.v[j + 1].p - x.v[j].p);
-    const double theta = theta2_ * std::exp(-std::log(theta2_ / theta1_) * rng.uniformDouble());
-    const double phi = 2 * M_PI * rng.uniformDouble();
-    const double st = std::sin(theta);
-    Vec3 dir = normalize(Frame(w).toWorld(Vec3(float(st * std::cos(phi)), float(st * std::sin(phi)), float(std::cos(theta)))));
+    const Vec3 dir = perturbDirection(x, j, j + 1, rng, theta1_, theta2_);
     y = x;
-    for (int i = j + 1; i <= k - 1; ++i) {
-      const PathVertex& prev = y.v[i - 1];
-      std::optional<PathVertex> hit = space_.trace(prev.p, prev.ng, dir);
-      if (!hit) return false;
-      if (i < k - 1) {
-        const std::optional<Vec3> next = followLobe(*hit, prev, transmits(x, i), TransportMode::Importance);
-        if (!next) return false;
-        hit->specular = true;
-        dir = *next;
-      } else {
-        if (hit->bsdf->isDelta()) return false;
-        hit->specular = false;
-      }
-      y.v[i] = *hit;
-    }
-    return true;
+    return retraceSpecularChain(space_, x, y, j + 1, k - 1, +1, dir, TransportMode::Importance);
   }
 
   double density(const Path& x, const Path& y) const override {
