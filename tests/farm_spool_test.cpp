@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <unistd.h>
 
 #include "proto/convert.h"
 #include "tests/support/temp_dir.h"
@@ -89,7 +90,7 @@ TEST(FarmSpool, FilmsOfAWorkerThatIsGoneAreTakenOverAndTornOnesDropped) {
     FilmSpool spool(dir, 1ull << 30);
     EXPECT_TRUE(spool.put(target(5), film(5)));
     EXPECT_TRUE(spool.put(target(6), film(6)));
-    EXPECT_TRUE(spool.put(target(9), film(9)));  // stays this (running) process's film
+    EXPECT_TRUE(spool.put(target(9), film(9)));  // becomes the film of a process that runs
   }
   // The first two renamed as a process that no longer runs would have named them (no pid is that high).
   std::vector<fs::path> files;
@@ -98,6 +99,8 @@ TEST(FarmSpool, FilmsOfAWorkerThatIsGoneAreTakenOverAndTornOnesDropped) {
   ASSERT_EQ(files.size(), 3u);
   fs::rename(files[0], fs::path(dir) / "2147483000-0.film");
   fs::rename(files[1], fs::path(dir) / "2147483000-1.film");
+  const fs::path alive = fs::path(dir) / (std::to_string(getppid()) + "-0.film");
+  fs::rename(files[2], alive);
   // A third film of that process, torn (cut short as a power loss might leave it).
   fs::copy_file(fs::path(dir) / "2147483000-1.film", fs::path(dir) / "2147483000-2.film");
   fs::resize_file(fs::path(dir) / "2147483000-2.film", fs::file_size(fs::path(dir) / "2147483000-2.film") / 2);
@@ -114,7 +117,7 @@ TEST(FarmSpool, FilmsOfAWorkerThatIsGoneAreTakenOverAndTornOnesDropped) {
   });
   EXPECT_EQ(tried, (std::vector<uint32_t>{5, 6}));
   EXPECT_EQ(filesIn(dir), 1u) << "the torn film is removed, the delivered ones too; the running process's stays";
-  EXPECT_TRUE(fs::exists(files[2]));
+  EXPECT_TRUE(fs::exists(alive));
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // Finished films spooled on disk while the coordinator is away (see spool.h).
 #include "worker/spool.h"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <stdio.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -115,14 +117,27 @@ FilmSpool::FilmSpool(std::string dir, uint64_t maxBytes) : dir_(std::move(dir)),
     long pid = 0;
     unsigned long long n = 0;
     char tail[8] = {};
-    const bool film = std::sscanf(name.c_str(), "%ld-%llu.fil%1s", &pid, &n, tail) == 3 && std::strcmp(tail, "m") == 0;
-    if (film && pid > 0 && (pid == getpid() || ::kill(pid_t(pid), 0) == 0 || errno != ESRCH)) continue;  // alive
+    const bool film = std::sscanf(name.c_str(), "%ld-%llu.fil%1s", &pid, &n, tail) == 3 &&
+                      std::strcmp(tail, "m") == 0 && name.find(".tmp") == std::string::npos;
     if (!film) {
-      if (name.find(".tmp") != std::string::npos) fs::remove(p, ec);  // a write cut short
+      if (name.find(".tmp") != std::string::npos && (pid <= 0 || pid == getpid() || ::kill(pid_t(pid), 0) != 0))
+        fs::remove(p, ec);  // a write cut short
       continue;
     }
-    const std::string mine = (fs::path(dir_) / fmt::format("{}-{}.film", getpid(), next_++)).string();
-    if (::rename(p.c_str(), mine.c_str()) != 0) continue;  // another worker took it
+    std::string mine = p.string();
+    if (pid == getpid()) {  // left by an earlier process with this pid: this one has written nothing yet
+      next_ = std::max<uint64_t>(next_, n + 1);
+    } else {
+      if (pid > 0 && (::kill(pid_t(pid), 0) == 0 || errno != ESRCH)) continue;  // its worker still runs
+      // Renamed to this process's name: atomic, so one worker takes each; never over an existing film.
+      int rc = -1;
+      for (int tries = 0; tries < 1000 && rc != 0; ++tries) {
+        mine = (fs::path(dir_) / fmt::format("{}-{}.film", getpid(), next_++)).string();
+        rc = ::renameat2(AT_FDCWD, p.c_str(), AT_FDCWD, mine.c_str(), RENAME_NOREPLACE);
+        if (rc != 0 && errno != EEXIST) break;  // another worker took it
+      }
+      if (rc != 0) continue;
+    }
     if (auto e = adopt(mine)) {
       spdlog::info("event=spool_adopted file={} job={} task={}", name, e->target.jobId, e->target.taskIndex);
       bytes_ += e->bytes;
