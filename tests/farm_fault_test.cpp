@@ -1,8 +1,7 @@
 // The coordinator never dies from a job (issue 13): values a scene carries beyond the plan's limits are
-// refused at submit with INVALID_ARGUMENT naming the field; a job that cannot proceed in a background
-// thread (a recorded job the planner cannot read) fails with its reason while the others complete; a full
-// or read-only state directory answers RESOURCE_EXHAUSTED / UNAVAILABLE and the process lives on, losing
-// nothing once there is room again. Real coordinator and worker processes on loopback.
+// refused at submit with INVALID_ARGUMENT naming the field; a full or read-only state directory answers
+// RESOURCE_EXHAUSTED / UNAVAILABLE, a background thread that cannot record a job's state (the reaper
+// failing a job on a full disk) keeps it in memory and lives on, and nothing is lost once there is room. Real coordinator and worker processes on loopback.
 #include <gtest/gtest.h>
 #include <sys/mount.h>
 
@@ -10,8 +9,6 @@
 #include <cstring>
 #include <fstream>
 
-#include "common/farm/bundle.h"
-#include "coordinator/job_store.h"
 #include "tests/farm/farm_harness.h"
 
 namespace mlt::farm::test {
@@ -64,40 +61,6 @@ TEST(FarmFault, SceneValuesBeyondThePlanLimitsAreRefusedAtSubmitAndOtherJobsGoOn
   EXPECT_EQ(c.list().size(), 1u);
 }
 
-// A job recorded with settings the plan refuses (as a build without the submit check recorded them) is
-// FAILED by the planner with the field named; the planner thread goes on and the next job completes.
-TEST(FarmFault, AJobThePlannerCannotReadFailsWithItsReasonAndTheNextCompletes) {
-  Farm farm;
-  {
-    // STATE as a previous coordinator left it: the bundle and a queued job whose max_depth is 2000.
-    const std::string scene = readFile(cornellBox());
-    const std::vector<BundleFile> files{{"cornell-box.xml", scene}};
-    const std::string hash = bundleHash(files);
-    fs::create_directories(farm.stateDir + "/scenes");
-    writeBundle(farm.stateDir + "/scenes/" + hash, files);
-    wire::SubmittedSettings bad = tinySettings("pt");
-    bad.hasSize = bad.hasMaxDepth = bad.hasRrDepth = bad.hasSpp = true;
-    bad.settings.integrator.maxDepth = 2000;
-    JobStore store(farm.stateDir + "/farm.db");
-    JobRecord rec;
-    rec.name = "recorded-by-an-older-build";
-    rec.state = int(JobState::Queued);
-    rec.settings = wire::toProto(bad).SerializeAsString();
-    rec.sceneHash = hash;
-    rec.sceneFile = "cornell-box.xml";
-    EXPECT_EQ(store.insertJob(rec), 1);
-  }
-  farm.startCoordinator();
-  farm.startWorker(1);
-  auto c = farm.client();
-  JobStatus failed = farm.waitDone("job-1");
-  EXPECT_EQ(failed.state, JobState::Failed) << describeStatus(failed);
-  EXPECT_NE(failed.error.find("settings.max_depth"), std::string::npos) << failed.error;
-  ASSERT_TRUE(farm.coordinator->process.running());
-  JobStatus next = c.submit(cornellBox(), tinySettings("pt"));
-  EXPECT_EQ(farm.waitDone(next.jobId).state, JobState::Done);
-}
-
 // A size-limited tmpfs mounted over the state directory (needs root, as CI's container runs).
 struct SmallFilesystem {
   std::string dir;
@@ -137,15 +100,25 @@ TEST(FarmFault, AFullOrReadOnlyStateDirectoryAnswersWithAStatusAndTheCoordinator
   if (!small.mounted)
     GTEST_SKIP() << "cannot mount a size-limited tmpfs on " << farm.stateDir << " (" << small.why
                  << "): this test needs root (CAP_SYS_ADMIN)";
-  farm.startCoordinator();
+  farm.startCoordinator({"--max-attempts", "1"});
   auto c = farm.client();
-  // A job planned (its plan recorded) before the disk fills; no worker yet.
+  // Two jobs planned (their plans recorded) before the disk fills. A worker holds a task of the first.
+  JobStatus doomed = c.submit(cornellBox(), tinySettings("pt"));
   JobStatus a = c.submit(cornellBox(), tinySettings("pt"));
   ASSERT_EQ(farm.waitFor(a.jobId, [](const JobStatus& s) { return s.state == JobState::Running; }).state,
             JobState::Running);
+  ChildProcess& holder = farm.startWorker(1, {"--debug-task-delay-ms", "100000"});
+  farm.waitFor(doomed.jobId, [](const JobStatus& s) { return s.leasedTasks >= 1; });
 
   const uint64_t filler = fill(farm.stateDir + "/filler");
   EXPECT_GT(filler, 0u);
+  // The holder dies: its lease expires and, out of attempts, the reaper fails the job; the database
+  // cannot record that on a full disk, and the reaper thread lives on (the state is kept in memory).
+  holder.signal(SIGKILL);
+  JobStatus failed = farm.waitDone(doomed.jobId);
+  EXPECT_EQ(failed.state, JobState::Failed) << describeStatus(failed);
+  EXPECT_NE(readFile(farm.dir / "coordinator-0.log").find("event=state_not_recorded state=FAILED"), std::string::npos);
+  ASSERT_TRUE(farm.coordinator->process.running());
   // A new bundle cannot be stored: RESOURCE_EXHAUSTED, and nothing recorded.
   const std::string other = readFile(cornellBox()) + "<!-- another bundle -->\n";
   expectRpcError([&] { c.submitBundle({{"scene.xml", other}}, "scene.xml", tinySettings("pt")); },
