@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 #include "common/farm/scene_loading.h"
 #include "common/job/mlt_job.h"
 #include "coordinator/coordinator.h"
+#include "coordinator/storage_error.h"
 #include "proto/convert.h"
 
 namespace fs = std::filesystem;
@@ -51,11 +53,18 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   const std::string dir = sceneDir(hash);
   if (!fs::exists(dir)) {
     std::string tmp = dir + ".tmp-" + instance_ + fmt::format("-{}", std::hash<std::thread::id>()(std::this_thread::get_id()));
-    fs::remove_all(tmp);
-    writeBundle(tmp, bundle.files);
+    try {
+      fs::remove_all(tmp);
+      writeBundle(tmp, bundle.files);
+    } catch (const std::exception& e) {  // disk full or read-only: RESOURCE_EXHAUSTED / UNAVAILABLE
+      const int err = errno;
+      std::error_code ec;
+      fs::remove_all(tmp, ec);
+      throw storageError(fmt::format("bundle {}: {}", hash.substr(0, 12), e.what()), err);
+    }
     std::error_code ec;
     fs::rename(tmp, dir, ec);  // another submit of the same bundle may have won: same bytes
-    if (ec) fs::remove_all(tmp);
+    if (ec) fs::remove_all(tmp, ec);
   }
   // 2. Load and validate the scene exactly as the workers will.
   SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string(), req.defines);
@@ -74,6 +83,16 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   } catch (const std::invalid_argument& e) {
     throw FarmError(Code::InvalidArgument, e.what());
   }
+  // Every value as the planner and the workers will read it back: a scene may carry values the wire
+  // refuses (a 65536 px film, sample_count 2^30, max_depth 2000; the plan's limits are 16384, 2^20, 1024).
+  // Checked once, here, against exactly those limits, so the job is refused now, naming the field.
+  const wire::SubmittedSettings resolved{s, true, true, true, true, req.defines};
+  try {
+    wire::fromProto(wire::toProto(resolved));
+  } catch (const wire::WireError& e) {
+    throw FarmError(Code::InvalidArgument, fmt::format("{} (as submitted, or taken from the scene {} where not given)",
+                                                       e.what(), bundle.sceneFile));
+  }
   buildRenderScene(desc, s.width, s.height);  // throws InvalidArgument naming the element
 
   // 3. Record it.
@@ -82,7 +101,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   rec.name = req.name;
   rec.priority = req.priority;
   rec.state = int(JobState::Queued);
-  rec.settings = wire::toProto(wire::SubmittedSettings{s, true, true, true, true, req.defines}).SerializeAsString();
+  rec.settings = wire::toProto(resolved).SerializeAsString();
   rec.sceneHash = hash;
   rec.sceneFile = bundle.sceneFile;
   rec.submittedAt = unixNow();

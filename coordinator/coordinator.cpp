@@ -49,6 +49,7 @@ Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) 
   fs::create_directories(fs::path(opt_.stateDir) / "jobs");
   store_ = std::make_unique<JobStore>((fs::path(opt_.stateDir) / "farm.db").string());
   results_ = std::make_unique<ResultStore>((fs::path(opt_.stateDir) / "jobs").string());
+  creds_ = std::make_unique<Credentials>(opt_.stateDir);
   std::random_device rd;
   instance_ = fmt::format("{:08x}", uint32_t(rd()));
 
@@ -99,11 +100,32 @@ void Coordinator::setState(Job& job, JobState s, const std::string& error) {
     job.merged = {};      // the running sum is done with (the image is written, or there will be none)
     job.waiting.clear();
   }
-  store_->updateState(job.rec.id, int(s), job.status.error);
+  try {
+    store_->updateState(job.rec.id, int(s), job.status.error);
+  } catch (const std::exception& e) {  // the state stays in memory; a restart finds the last recorded one
+    spdlog::error("job={} event=state_not_recorded state={} error=\"{}\"", job.status.jobId, jobStateName(s), e.what());
+  }
   refreshProgress(job);
   touch(job);
   spdlog::info("job={} event=state state={}{}", job.status.jobId, jobStateName(s),
                error.empty() ? "" : fmt::format(" error=\"{}\"", error));
+}
+
+void Coordinator::runGuarded(int64_t id, const char* role, const std::function<void()>& step) {
+  std::string error;
+  try {
+    step();
+    return;
+  } catch (const std::exception& e) {
+    error = e.what();
+  } catch (...) {
+    error = "unknown exception";
+  }
+  std::lock_guard lock(mu_);
+  auto it = jobs_.find(id);
+  if (it == jobs_.end()) return;
+  spdlog::error("job={} event={}_failed error=\"{}\"", it->second.status.jobId, role, error);
+  if (!isTerminal(it->second.status.state)) setState(it->second, JobState::Failed, fmt::format("{}: {}", role, error));
 }
 
 void Coordinator::startRunning(Job& job, bool loadResults) {

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -21,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "coordinator/credentials.h"
 #include "coordinator/handler.h"
 #include "coordinator/job_store.h"
 #include "coordinator/merge.h"
@@ -58,6 +60,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   HeartbeatReply heartbeat(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
   std::vector<BundleFile> scene(const std::string& sceneHash) override;
   JobPlan plan(const std::string& jobId) override;
+  void admitUpload(const UploadAnnouncement& a) override;
   UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                      uint32_t taskIndex, PartialResult result) override;
   void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
@@ -101,7 +104,11 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
   void touch(Job& job);                    // bump version, notify watchers; caller holds mu_
   void refreshProgress(Job& job);
+  // Never throws: a state the database cannot record (disk full, read-only) is kept in memory and logged.
   void setState(Job& job, JobState s, const std::string& error = {});
+  // One step of a background thread (planning, merging) for job `id`: whatever `step` throws fails that
+  // job with the reason instead of ending the process. Caller does not hold mu_.
+  void runGuarded(int64_t id, const char* role, const std::function<void()>& step);
   // Plan known: build tasks, mark the stored results accepted and (loadResults) sum them, queue the rest.
   void startRunning(Job& job, bool loadResults = true);
   void foldAccepted(Job& job, uint32_t task, PartialResult result);  // caller holds mu_
@@ -109,6 +116,17 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   // if the job failed. Caller holds mu_.
   bool taskAttemptFailed(Job& job, uint32_t task, const std::string& reason);
   std::vector<Lease> leaseNow(const std::string& workerId, int maxTasks);  // caller holds mu_
+  // A registered worker, or one registered before a restart of this state directory (its id checks out,
+  // credentials.h: taken back). nullptr for an unknown or made-up id. Caller holds mu_.
+  WorkerRec* knownWorker(const std::string& workerId);
+  // The live lease `leaseId` of `workerId`: an entry of leases_ held by that worker, or a lease this state
+  // directory issued to it whose task nobody holds now (it expired, or was issued before a restart), taken
+  // back. nullptr with the reason in `why` otherwise (unknown, made up, another worker's, given away, the
+  // job over). Caller holds mu_.
+  LeaseRec* liveLease(const std::string& workerId, const std::string& leaseId, std::string& why);
+  // Checks an upload's lease: throws FarmError FailedPrecondition unless `leaseId` is the live lease of
+  // `workerId` on (job, taskIndex). Caller holds mu_.
+  void requireLease(const Job& job, const std::string& workerId, const std::string& leaseId, uint32_t taskIndex);
   std::string sceneDir(const std::string& hash) const;
   std::string jobDir(int64_t id) const;
   void plannerLoop();
@@ -121,6 +139,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   CoordinatorOptions opt_;
   std::unique_ptr<JobStore> store_;     // jobs and plans (SQLite)
   std::unique_ptr<ResultStore> results_;  // accepted task results (files)
+  std::unique_ptr<Credentials> creds_;    // worker and lease ids that check out (STATE/lease.key)
   std::mutex mu_;
   std::condition_variable changed_;     // status changes (watchers)
   std::condition_variable work_;        // planner: jobs to plan or merge

@@ -24,6 +24,14 @@ class ClientHandler {
   virtual std::string resultPath(const std::string& jobId, const std::string& format) = 0;
 };
 
+// What an upload announces in its header, checked before a byte of its film is read or reserved.
+struct UploadAnnouncement {
+  std::string workerId, leaseId, jobId;
+  uint32_t taskIndex = 0;
+  int width = 0, height = 0;
+  std::vector<uint32_t> splatLayers;  // ascending, layer 0 first
+};
+
 class WorkerHandler {
  public:
   virtual ~WorkerHandler() = default;
@@ -33,6 +41,12 @@ class WorkerHandler {
   // The bundle's files (NotFound for an unknown hash).
   virtual std::vector<BundleFile> scene(const std::string& sceneHash) = 0;
   virtual JobPlan plan(const std::string& jobId) = 0;
+  // Throws FarmError unless the announced upload may be read: the worker holds the live lease of that
+  // task and the film has the job's size. The default admits everything (transport tests' fakes).
+  virtual void admitUpload(const UploadAnnouncement&) {}
+  // Accepts a task's result once: only from the worker holding its live lease, only a film the task can
+  // hold (sizes, units, sample count, finite and quantized values); a task already accepted is dropped as
+  // a duplicate (accepted = false).
   virtual UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                              uint32_t taskIndex, PartialResult result) = 0;
   virtual void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds) = 0;

@@ -6,8 +6,23 @@
 #include <fmt/format.h>
 #include <stdexcept>
 
+#include "common/farm/farm_types.h"
+
 namespace mlt::farm {
 namespace {
+
+// A failed SQLite call as the status its caller answers: a full disk is RESOURCE_EXHAUSTED, a database
+// that cannot be written (read-only, I/O error, locked) UNAVAILABLE, anything else INTERNAL.
+[[noreturn]] void throwSqlite(sqlite3* db, const std::string& message) {
+  using Code = FarmError::Code;
+  const int rc = db ? (sqlite3_extended_errcode(db) & 0xff) : SQLITE_NOMEM;
+  Code code = Code::Internal;
+  if (rc == SQLITE_FULL) code = Code::ResourceExhausted;
+  else if (rc == SQLITE_READONLY || rc == SQLITE_IOERR || rc == SQLITE_CANTOPEN || rc == SQLITE_BUSY ||
+           rc == SQLITE_LOCKED || rc == SQLITE_PERM || rc == SQLITE_NOMEM)
+    code = Code::Unavailable;
+  throw FarmError(code, message);
+}
 
 class Stmt {
  public:
@@ -43,7 +58,7 @@ class Stmt {
  private:
   void check(int rc) { if (rc != SQLITE_OK) fail("bind"); }
   [[noreturn]] void fail(const char* what) {
-    throw std::runtime_error(fmt::format("{}: sqlite {}: {}", path_, what, sqlite3_errmsg(db_)));
+    throwSqlite(db_, fmt::format("{}: sqlite {}: {}", path_, what, sqlite3_errmsg(db_)));
   }
   sqlite3* db_;
   sqlite3_stmt* s_ = nullptr;
@@ -75,7 +90,7 @@ void JobStore::exec(const char* sql) {
   if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
     std::string msg = err ? err : "?";
     sqlite3_free(err);
-    throw std::runtime_error(fmt::format("{}: sqlite: {} ({})", path_, msg, sql));
+    throwSqlite(db_, fmt::format("{}: sqlite: {} ({})", path_, msg, sql));
   }
 }
 

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
+#include <fmt/format.h>
 
 #include "common/farm/scene_loading.h"
 #include "coordinator/coordinator.h"
@@ -24,13 +25,14 @@ void Coordinator::plannerLoop() {
         bestPriority = job.status.priority;
       }
     }
+    // A job that cannot proceed fails with its reason (runGuarded); the thread goes on with the others.
     if (toMerge >= 0) {
       lock.unlock();
-      merge(toMerge);
+      runGuarded(toMerge, "merge", [&] { merge(toMerge); });
       lock.lock();
     } else if (toPlan >= 0) {
       lock.unlock();
-      planOne(toPlan);
+      runGuarded(toPlan, "bootstrap", [&] { planOne(toPlan); });
       lock.lock();
     } else {
       work_.wait(lock);
@@ -39,7 +41,7 @@ void Coordinator::plannerLoop() {
 }
 
 void Coordinator::planOne(int64_t id) {
-  std::string file, jobId;
+  std::string file, jobId, recorded;
   RenderSettings settings;
   std::map<std::string, std::string> defines;
   {
@@ -48,15 +50,17 @@ void Coordinator::planOne(int64_t id) {
     if (job.status.state != JobState::Queued) return;
     setState(job, JobState::Planning);
     file = (fs::path(sceneDir(job.rec.sceneHash)) / job.rec.sceneFile).string();
-    v1::RenderSettings ps;
-    ps.ParseFromString(job.rec.settings);
-    settings = wire::fromProto(ps).settings;
     defines = job.defines;
     jobId = job.status.jobId;
+    recorded = job.rec.settings;
   }
   std::shared_ptr<JobPlan> plan;
   std::string error;
+  std::string record;
   try {
+    v1::RenderSettings ps;  // checked at submit; a job recorded by an older build may still be refused here
+    if (!ps.ParseFromString(recorded)) throw std::runtime_error("the recorded settings do not parse");
+    settings = wire::fromProto(ps).settings;
     auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
     spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
                  settings.bootstrapSamples);
@@ -64,19 +68,24 @@ void Coordinator::planOne(int64_t id) {
     spdlog::info("job={} event=bootstrap_done b={} b_stderr={} units={} seconds={:.3f}", jobId, plan->norm.b,
                  plan->norm.bStdErr, plan->units.size(), plan->norm.bootstrapSeconds);
     if (plan->units.empty()) error = "the plan has no work units";
-    wire::parseJobPlan(wire::jobPlanBytes(*plan));  // the plan must survive the wire
+    record = wire::jobPlanBytes(*plan);
+    wire::parseJobPlan(record);  // the plan must survive the wire
   } catch (const std::exception& e) {
     error = e.what();
   }
   std::lock_guard lock(mu_);
   Job& job = jobs_.at(id);
   if (job.status.state != JobState::Planning) return;  // cancelled meanwhile
+  if (error.empty()) try {
+    store_->setPlan(id, record, uint32_t(splitTasks(*plan).size()), int(JobState::Running));
+  } catch (const std::exception& e) {  // disk full, read-only: without a recorded plan the job cannot run
+    error = fmt::format("cannot record the plan: {}", e.what());
+  }
   if (!error.empty()) {
     setState(job, JobState::Failed, "bootstrap: " + error);
     return;
   }
   job.plan = plan;
-  store_->setPlan(id, wire::jobPlanBytes(*plan), uint32_t(splitTasks(*plan).size()), int(JobState::Running));
   job.status.state = JobState::Running;
   startRunning(job);
   touch(job);

@@ -38,8 +38,10 @@ void Coordinator::writePreview(int64_t id, std::unique_lock<std::mutex>& lock) {
     fs::rename(dir / "preview.tmp.png", dir / "preview.png");
     spdlog::info("job={} event=preview tasks={}/{} units={}", identity.jobId, accepted,
                  splitTasks(*plan).size(), merged.units.size());
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // a full disk, say: the job goes on without a preview
     spdlog::warn("job={} event=preview_failed error=\"{}\"", identity.jobId, e.what());
+  } catch (...) {
+    spdlog::warn("job={} event=preview_failed error=\"unknown exception\"", identity.jobId);
   }
   lock.lock();
 }

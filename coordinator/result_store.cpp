@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "coordinator/storage_error.h"
 #include "proto/convert.h"
 
 namespace fs = std::filesystem;
@@ -57,9 +59,10 @@ void ResultStore::put(int64_t job, uint32_t task, const PartialResult& result) c
     out.write(blob.data(), std::streamsize(blob.size()));
     out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
     if (!out.flush()) {
+      const int err = errno;  // ENOSPC: a full disk answers RESOURCE_EXHAUSTED (storage_error.h)
       std::error_code ec;
       fs::remove(tmp, ec);
-      throw std::runtime_error(fmt::format("{}: cannot write the result of task {}", tmp, task));
+      throw storageError(fmt::format("{}: cannot write the result of task {}", tmp, task), err);
     }
   }
   fs::rename(tmp, final);

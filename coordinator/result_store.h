@@ -24,7 +24,8 @@ class ResultStore {
   explicit ResultStore(std::string jobsDir);  // STATE/jobs
 
   // Writes (job, task)'s result. A task's result is a pure function of the plan, so a second write of
-  // the same task (a duplicate upload racing the first) writes the same bytes. Throws std::runtime_error.
+  // the same task (a duplicate upload racing the first) writes the same bytes. Throws FarmError
+  // (storage_error.h: RESOURCE_EXHAUSTED when the disk is full) or std::filesystem::filesystem_error.
   void put(int64_t job, uint32_t task, const PartialResult& result) const;
   std::vector<uint32_t> stored(int64_t job) const;  // ascending
   // nullopt if the file is missing, torn or does not parse (the caller renders the task again).

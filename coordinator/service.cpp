@@ -5,10 +5,13 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
 #include <map>
 
+#include "coordinator/storage_error.h"
 #include "proto/farm_convert.h"
 #include "proto/sparse_film.h"
 #include "proto/mltfarm.grpc.pb.h"
@@ -242,16 +245,23 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       const v1::PartialHeader& ph = header.partial();
       if (ph.width() < 1 || ph.height() < 1 || ph.width() > 16384 || ph.height() > 16384)
         throw wire::WireError("partial.width", fmt::format("film {}x{} out of range", ph.width(), ph.height()));
-      const size_t layers = wire::headerLayers(ph).size();
+      const std::vector<uint32_t> layerList = wire::headerLayers(ph);
+      const size_t layers = layerList.size();
       if (layers > wire::kMaxSplatLayer + 1)
         throw wire::WireError("partial.splat_layers", fmt::format("{} layers", layers));
+      if (!std::is_sorted(layerList.begin(), layerList.end()) || layerList.front() != 0)
+        throw wire::WireError("partial.splat_layers", "must ascend from layer 0");
+      // Who sends it and what it announces, before a byte of the film is reserved or read: only the holder
+      // of the task's live lease, only a film of the job's size.
+      h_.admitUpload({header.worker_id(), header.lease_id(), header.job_id(), header.task_index(), int(ph.width()),
+                      int(ph.height()), layerList});
       const bool raw = ph.film_encoding() == v1::FILM_RAW;
       if (raw ? ph.film_bytes() != wire::filmByteSize(ph.width(), ph.height(), layers)
               : ph.film_bytes() > wire::maxZeroRunsBytes(ph.width(), ph.height(), layers))
         throw wire::WireError("partial.film_bytes", fmt::format("{} for a {}x{} film with {} splat layers", ph.film_bytes(),
                                                                 ph.width(), ph.height(), layers));
       std::string film;
-      film.reserve(ph.film_bytes());
+      film.reserve(std::min<uint64_t>(ph.film_bytes(), 64ull << 20));  // grows with what arrives beyond that
       while (reader->Read(&msg)) {
         if (!msg.has_film_chunk()) throw wire::WireError("film_chunk", "only film chunks may follow the header");
         if (msg.film_chunk().size() > wire::kMaxChunkBytes)
@@ -307,10 +317,15 @@ grpc::Status statusFromException(std::exception_ptr e) {
       case FarmError::Code::Unauthenticated: code = StatusCode::UNAUTHENTICATED; break;
       case FarmError::Code::Unavailable: code = StatusCode::UNAVAILABLE; break;
       case FarmError::Code::Internal: code = StatusCode::INTERNAL; break;
+      case FarmError::Code::ResourceExhausted: code = StatusCode::RESOURCE_EXHAUSTED; break;
     }
     return Status(code, f.what());
   } catch (const wire::WireError& w) {
     return Status(StatusCode::INVALID_ARGUMENT, w.what());
+  } catch (const std::filesystem::filesystem_error& x) {  // the state directory: full, read-only, failing
+    const FarmError f = storageError(x.what(), x.code().value());
+    return Status(f.code() == FarmError::Code::ResourceExhausted ? StatusCode::RESOURCE_EXHAUSTED
+                                                                 : StatusCode::UNAVAILABLE, f.what());
   } catch (const std::exception& x) {
     return Status(StatusCode::INTERNAL, x.what());
   } catch (...) {

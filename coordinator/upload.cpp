@@ -1,4 +1,5 @@
-// Accepting a task's result (WorkerHandler::upload): checked against the task, accepted once per
+// Accepting a task's result (WorkerHandler::admitUpload, upload): only from the worker holding the task's
+// live lease, checked against the task (result_check.h), accepted once per
 // (job, task), persisted (result_store.h) before it is acknowledged and summed into the job's running
 // total in task order; the last one hands the job to the merge.
 #include <spdlog/spdlog.h>
@@ -9,6 +10,7 @@
 #include <optional>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/result_check.h"
 
 namespace fs = std::filesystem;
 
@@ -18,6 +20,41 @@ namespace {
 using Code = FarmError::Code;
 
 }  // namespace
+
+void Coordinator::requireLease(const Job& job, const std::string& workerId, const std::string& leaseId,
+                               uint32_t taskIndex) {
+  if (!knownWorker(workerId))
+    throw FarmError(Code::FailedPrecondition, fmt::format("worker_id: unknown worker '{}'", workerId.substr(0, 80)));
+  std::string why;
+  const LeaseRec* l = liveLease(workerId, leaseId, why);
+  if (l && (l->job != job.rec.id || l->task != taskIndex))
+    why = fmt::format("lease_id: lease {} is for another task", leaseId.substr(0, 80));
+  if (!l || !why.empty()) {
+    spdlog::warn("job={} task={} worker={} lease={} event=upload_refused reason=\"{}\"", job.status.jobId, taskIndex,
+                 workerId.substr(0, 80), leaseId.substr(0, 80), why);
+    throw FarmError(Code::FailedPrecondition, why);
+  }
+}
+
+void Coordinator::admitUpload(const UploadAnnouncement& a) {
+  std::lock_guard lock(mu_);
+  Job& job = findJob(a.jobId);
+  if (!job.plan) throw FarmError(Code::FailedPrecondition, fmt::format("job {} has no plan", a.jobId));
+  if (a.taskIndex >= job.tasks.size())
+    throw FarmError(Code::InvalidArgument,
+                    fmt::format("task_index: {} out of range [0, {})", a.taskIndex, job.tasks.size()));
+  // A task already accepted, or a job no longer running, is answered by upload() (accepted = false) once
+  // the film is read: the duplicate of a lost reply is no error.
+  if (job.status.state == JobState::Running && job.taskState[a.taskIndex] != TaskState::Accepted)
+    requireLease(job, a.workerId, a.leaseId, a.taskIndex);
+  if (a.width != job.plan->settings.width || a.height != job.plan->settings.height)
+    throw FarmError(Code::InvalidArgument, fmt::format("partial.width/height: {}x{}, the job renders {}x{}", a.width,
+                                                       a.height, job.plan->settings.width, job.plan->settings.height));
+  const uint32_t maxLayer = maxSplatLayer(*job.plan);
+  if (!a.splatLayers.empty() && a.splatLayers.back() > maxLayer)
+    throw FarmError(Code::InvalidArgument, fmt::format("partial.splat_layers: layer {} (this job fills layers 0-{})",
+                                                       a.splatLayers.back(), maxLayer));
+}
 
 UploadReply Coordinator::upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                                 uint32_t taskIndex, PartialResult result) {
@@ -48,19 +85,20 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
       throw FarmError(Code::InvalidArgument,
                       fmt::format("task_index: {} out of range [0, {})", taskIndex, job.tasks.size()));
     range = job.tasks[taskIndex];
-    if (result.film.width() != job.plan->settings.width || result.film.height() != job.plan->settings.height)
-      throw FarmError(Code::InvalidArgument, fmt::format("partial.width/height: {}x{}, the job renders {}x{}",
-                                                         result.film.width(), result.film.height(),
-                                                         job.plan->settings.width, job.plan->settings.height));
-    std::vector<uint32_t> expect;
-    for (uint32_t u = range.begin; u < range.end; ++u) expect.push_back(u);
-    if (result.units != expect)
-      throw FarmError(Code::InvalidArgument, fmt::format("partial.units: task {} must hold units {}-{}", taskIndex,
-                                                         range.begin, range.end - 1));
     if (auto r = refused(job)) return *r;
+    requireLease(job, workerId, leaseId, taskIndex);  // only from the worker holding the task's live lease
     id = job.rec.id;
     plan = job.plan;
     identity = {job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
+  }
+  // The film must be one the task can make before it is stored or counted (outside the lock: it reads
+  // every value). Refused: the worker reports the failure, the task is rendered again.
+  try {
+    checkTaskResult(*plan, taskIndex, range, result);
+  } catch (const FarmError& e) {
+    spdlog::warn("job={} task={} worker={} lease={} event=upload_refused reason=\"{}\"", jobId, taskIndex, workerId,
+                 leaseId, e.what());
+    throw;
   }
   // Persist before acknowledging: nothing accepted is lost.
   results_->put(id, taskIndex, result);
@@ -73,6 +111,8 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   }
   std::lock_guard lock(mu_);
   Job& job = jobs_.at(id);
+  // Still running and not accepted meanwhile: counted (the film came from the lease holder and passed the
+  // checks, even if its lease expired while it was being stored).
   if (auto r = refused(job)) return *r;
   job.taskState[taskIndex] = TaskState::Accepted;
   for (auto it = leases_.begin(); it != leases_.end();)

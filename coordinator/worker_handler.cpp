@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fmt/format.h>
+#include <optional>
 
 #include "common/farm/bundle.h"
 #include "coordinator/coordinator.h"
@@ -23,7 +24,7 @@ using Code = FarmError::Code;
 Registration Coordinator::registerWorker(const WorkerInfo& info) {
   std::lock_guard lock(mu_);
   Registration r;
-  r.workerId = fmt::format("w{}-{}", instance_, nextWorker_++);
+  r.workerId = creds_->workerId(instance_, nextWorker_++);
   r.heartbeatSeconds = opt_.heartbeatSeconds;
   r.leaseTimeoutSeconds = opt_.leaseTimeoutSeconds;
   workers_[r.workerId] = {info, Clock::now()};
@@ -33,10 +34,9 @@ Registration Coordinator::registerWorker(const WorkerInfo& info) {
 
 std::vector<Lease> Coordinator::lease(const std::string& workerId, int maxTasks) {
   std::unique_lock lock(mu_);
-  auto w = workers_.find(workerId);
-  if (w == workers_.end())
-    throw FarmError(Code::FailedPrecondition, fmt::format("worker_id: unknown worker '{}': register again", workerId));
-  w->second.lastSeen = Clock::now();
+  WorkerRec* w = knownWorker(workerId);
+  if (!w) throw FarmError(Code::FailedPrecondition, fmt::format("worker_id: unknown worker '{}': register again", workerId));
+  w->lastSeen = Clock::now();
   // Long poll: with nothing to lease, wait (up to leaseWaitSeconds) for work to appear (a plan finished,
   // a task requeued) instead of letting the worker poll: an idle worker starts within milliseconds.
   const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
@@ -64,7 +64,7 @@ std::vector<Lease> Coordinator::leaseNow(const std::string& workerId, int maxTas
       job->pending.pop_front();
       job->taskState[t] = TaskState::Leased;
       Lease l;
-      l.leaseId = fmt::format("l{}-{}", instance_, nextLease_++);
+      l.leaseId = creds_->leaseId(instance_, nextLease_++, job->rec.id, t, workerId);
       l.jobId = job->status.jobId;
       l.taskIndex = t;
       l.unitBegin = job->tasks[t].begin;
@@ -86,28 +86,75 @@ std::vector<Lease> Coordinator::leaseNow(const std::string& workerId, int maxTas
   return out;
 }
 
+Coordinator::WorkerRec* Coordinator::knownWorker(const std::string& workerId) {
+  if (auto w = workers_.find(workerId); w != workers_.end()) return &w->second;
+  if (!creds_->validWorker(workerId)) return nullptr;
+  spdlog::info("worker={} event=worker_resumed (registered before a restart, or silent for a while)", workerId);
+  return &(workers_[workerId] = {WorkerInfo{}, Clock::now()});
+}
+
+Coordinator::LeaseRec* Coordinator::liveLease(const std::string& workerId, const std::string& leaseId, std::string& why) {
+  if (auto it = leases_.find(leaseId); it != leases_.end()) {
+    if (it->second.workerId == workerId) return &it->second;
+    why = fmt::format("lease_id: lease {} is held by another worker", leaseId.substr(0, 80));
+    return nullptr;
+  }
+  // Not in the table: it expired, or this process restarted since it was issued. Taken back when its task
+  // waits for a worker; lost when it was given away (leased again), accepted, or the job is over.
+  const std::optional<LeaseClaim> claim = creds_->parseLease(leaseId, workerId);
+  if (!claim) {
+    why = fmt::format("lease_id: '{}' is not a lease of worker '{}'", leaseId.substr(0, 80), workerId.substr(0, 80));
+    return nullptr;
+  }
+  auto j = jobs_.find(claim->job);
+  if (j == jobs_.end() || j->second.status.state != JobState::Running || claim->task >= j->second.tasks.size()) {
+    why = fmt::format("lease_id: lease {} belongs to a job that is not running", leaseId.substr(0, 80));
+    return nullptr;
+  }
+  Job& job = j->second;
+  if (job.taskState[claim->task] != TaskState::Pending) {
+    why = fmt::format("lease_id: lease {} of task {} of {} expired and the task was {}", leaseId.substr(0, 80),
+                      claim->task, job.status.jobId,
+                      job.taskState[claim->task] == TaskState::Accepted ? "accepted from another worker"
+                                                                         : "leased to another worker");
+    return nullptr;
+  }
+  std::erase(job.pending, claim->task);
+  job.taskState[claim->task] = TaskState::Leased;
+  LeaseRec& l = leases_[leaseId] = {workerId, job.rec.id, claim->task,
+                                    Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                       std::chrono::duration<double>(opt_.leaseTimeoutSeconds))};
+  spdlog::info("job={} task={} worker={} lease={} event=lease_resumed", job.status.jobId, claim->task, workerId, leaseId);
+  refreshProgress(job);
+  touch(job);
+  return &l;
+}
+
 HeartbeatReply Coordinator::heartbeat(const std::string& workerId, const std::vector<std::string>& leaseIds) {
   std::lock_guard lock(mu_);
   HeartbeatReply r;
-  auto w = workers_.find(workerId);
-  if (w == workers_.end()) {
+  WorkerRec* w = knownWorker(workerId);
+  if (!w) {
     r.unknownWorker = true;
     return r;
   }
-  w->second.lastSeen = Clock::now();
+  w->lastSeen = Clock::now();
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(opt_.leaseTimeoutSeconds));
   for (const std::string& id : leaseIds) {
-    auto it = leases_.find(id);
-    if (it == leases_.end()) continue;  // expired or from before a restart: the upload decides
-    auto job = jobs_.find(it->second.job);
-    if (job == jobs_.end() || job->second.status.state != JobState::Running ||
-        job->second.taskState[it->second.task] == TaskState::Accepted) {
+    // A lease the worker no longer holds (given away after it expired, its task accepted, its job over,
+    // or never its own) is named in the reply: the worker abandons that task.
+    std::string why;
+    LeaseRec* l = liveLease(workerId, id, why);
+    auto job = l ? jobs_.find(l->job) : jobs_.end();
+    if (!l || job == jobs_.end() || job->second.status.state != JobState::Running ||
+        job->second.taskState[l->task] == TaskState::Accepted) {
       r.cancelledLeases.push_back(id);
-      leases_.erase(it);
+      if (l) leases_.erase(id);
+      else spdlog::info("worker={} lease={} event=lease_lost reason=\"{}\"", workerId, id.substr(0, 80), why);
       continue;
     }
-    it->second.deadline = deadline;
+    l->deadline = deadline;
   }
   return r;
 }

@@ -15,19 +15,6 @@
 namespace mlt::farm::test {
 namespace {
 
-// Expects `f` to throw RpcError with `code` and a message containing `needle`.
-template <class F>
-void expectRpcError(F&& f, grpc::StatusCode code, const std::string& needle, const char* what) {
-  try {
-    f();
-    ADD_FAILURE() << what << ": no error";
-  } catch (const RpcError& e) {
-    EXPECT_EQ(e.code(), code) << what << ": " << e.what();
-    EXPECT_NE(e.message().find(needle), std::string::npos) << what << ": message '" << e.message() << "' lacks '"
-                                                           << needle << "'";
-  }
-}
-
 const char* kObjScene = R"(<scene version="3.0.0">
   <sensor type="perspective">
     <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>

@@ -28,6 +28,7 @@ WorkerOptions withDefaults(WorkerOptions o) {
   if (o.threads <= 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
   if (o.cacheDir.empty())
     o.cacheDir = (fs::temp_directory_path() / fmt::format("mltfarm-worker-cache-{}", getuid())).string();
+  if (o.spoolDir.empty()) o.spoolDir = (fs::path(o.cacheDir) / "spool").string();
   return o;
 }
 
@@ -91,6 +92,8 @@ void Worker::heartbeatLoop() {
       for (auto& a : active_)
         if (!a->finished) leases.push_back(a->lease.leaseId);
     }
+    if (spool_)  // spooled films keep their leases, so that nobody else is given their tasks meanwhile
+      for (std::string& l : spool_->leaseIds(id)) leases.push_back(std::move(l));
     try {
       HeartbeatReply r =
           client_.heartbeat(id, leases, std::chrono::milliseconds(int(std::max(1.0, 2 * interval) * 1000)));
@@ -153,15 +156,22 @@ void Worker::runTask(Active* a) {
     // now so that a core never waits on the network.
     releaseSlot(a);
     int attempt = 0;
+    const UploadTarget target{workerId, l.leaseId, l.jobId, l.taskIndex};
     while (true) {
       try {
-        UploadReply r = client_.upload({workerId, l.leaseId, l.jobId, l.taskIndex}, result);
+        UploadReply r = client_.upload(target, result);
         spdlog::info("worker={} job={} task={} units={}-{} lease={} event=uploaded accepted={} seconds={:.3f} message=\"{}\"",
                      workerId, l.jobId, l.taskIndex, l.unitBegin, l.unitEnd - 1, l.leaseId, r.accepted, result.seconds,
                      r.message);
         break;
       } catch (const RpcError& e) {
-        if (!isTransient(e.code()) || attempt > 12 || (stop_ && !opt_.drain)) throw;
+        if (!isTransient(e.code())) throw;
+        // The coordinator is away: the film waits on disk, however long, and goes up when it answers again.
+        if (spool_ && spool_->put(target, result)) {
+          spooled_.notify_all();
+          break;
+        }
+        if (attempt > 12 || (stop_ && !opt_.drain)) throw;  // no room in the spool: retried from memory
         spdlog::warn("worker={} job={} task={} event=upload_retry attempt={} error=\"{}\"", workerId, l.jobId,
                      l.taskIndex, attempt, e.what());
         backoff(attempt);
@@ -177,6 +187,37 @@ void Worker::runTask(Active* a) {
   releaseSlot(a);
   a->finished = true;
   slotFreed_.notify_all();
+}
+
+FilmSpool::Outcome Worker::uploadSpooled(const UploadTarget& t, const PartialResult& r) {
+  try {
+    UploadReply reply = client_.upload(t, r);
+    spdlog::info("worker={} job={} task={} lease={} event=uploaded_from_spool accepted={} message=\"{}\"", t.workerId,
+                 t.jobId, t.taskIndex, t.leaseId, reply.accepted, reply.message);
+    return FilmSpool::Outcome::Done;
+  } catch (const RpcError& e) {
+    if (isTransient(e.code())) return FilmSpool::Outcome::Retry;
+    // Refused for good: the lease was given away, the task accepted from another worker, the job is over.
+    spdlog::warn("worker={} job={} task={} lease={} event=spool_refused status={} message=\"{}\"", t.workerId,
+                 t.jobId, t.taskIndex, t.leaseId, statusCodeName(e.code()), e.message());
+    return FilmSpool::Outcome::Done;
+  }
+}
+
+void Worker::spoolLoop() {
+  auto upload = [this](const UploadTarget& t, const PartialResult& r) { return uploadSpooled(t, r); };
+  int attempt = 0;
+  while (!stop_) {
+    if (spool_->size() == 0) {
+      attempt = 0;
+      std::unique_lock lock(mu_);
+      spooled_.wait_for(lock, std::chrono::milliseconds(500));
+      continue;
+    }
+    spool_->drain(upload);
+    if (spool_->size() > 0) backoff(attempt);
+    else attempt = 0;
+  }
 }
 
 void Worker::releaseSlot(Active* a) {
@@ -215,7 +256,19 @@ int Worker::run() {
   // Units may use TBB inside; never more threads than we were given.
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(opt_.threads));
   arena_ = std::make_unique<tbb::task_arena>(opt_.threads);
-  if (!registerWithBackoff()) return stop_ ? 0 : 1;
+  if (opt_.spoolMaxBytes > 0) spool_ = std::make_unique<FilmSpool>(opt_.spoolDir, opt_.spoolMaxBytes);
+  std::thread spooler;
+  if (spool_) spooler = std::thread([this] { spoolLoop(); });
+  if (!registerWithBackoff()) {
+    const int rc = stop_ ? 0 : 1;
+    stop_ = true;
+    spooled_.notify_all();
+    if (spooler.joinable()) spooler.join();
+    return rc;
+  }
+  // Films spooled while the coordinator was away (by this process or one before it on the same spool
+  // directory) go up before new work is leased: their tasks are not given to anyone else meanwhile.
+  if (spool_) spool_->drain([this](const UploadTarget& t, const PartialResult& r) { return uploadSpooled(t, r); });
   std::thread heartbeat([this] { heartbeatLoop(); });
   int attempt = 0;
   while (!stop_) {
@@ -294,6 +347,11 @@ int Worker::run() {
     if (a->thread.joinable()) a->thread.join();
   active_.clear();
   heartbeat.join();
+  spooled_.notify_all();
+  if (spooler.joinable()) spooler.join();
+  if (spool_ && spool_->size() > 0)
+    spdlog::warn("worker={} event=stopped_with_spooled_films count={} dir={} (the next worker on it uploads them)",
+                 workerId_, spool_->size(), opt_.spoolDir);
   spdlog::info("worker={} event=stopped", workerId_);
   return 0;
 }

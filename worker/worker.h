@@ -2,7 +2,9 @@
 // thread count, run each task (its work units in index order) on its own thread, upload the partial
 // film, heartbeat the leases it holds. Scenes are cached by content hash (on disk and built in memory),
 // plans by job. When the coordinator is away it retries with exponential backoff and registers again
-// after a coordinator restart. stop() (SIGTERM) stops leasing, abandons unfinished tasks between work
+// after a coordinator restart; films finished meanwhile wait in a spool on disk (worker/spool.h) and are
+// uploaded when it answers again. A heartbeat that names a lease as cancelled (given away after it
+// expired, its task accepted elsewhere, its job over) makes the worker abandon that task. stop() (SIGTERM) stops leasing, abandons unfinished tasks between work
 // units and returns their leases so other workers pick them up at once.
 #pragma once
 #include <tbb/task_arena.h>
@@ -21,6 +23,7 @@
 #include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "worker/coordinator_client.h"
+#include "worker/spool.h"
 
 namespace mlt::farm {
 
@@ -29,6 +32,10 @@ struct WorkerOptions {
   int threads = 0;          // parallel tasks; 0 = hardware concurrency
   std::string cacheDir;     // scene bundles by hash; default $TMPDIR/mltfarm-worker-cache
   bool drain = false;       // on stop: finish the tasks in hand instead of returning them
+  // Finished films the coordinator could not take (it is away) wait here and are uploaded when it answers
+  // again (worker/spool.h); default <cacheDir>/spool. At most spoolMaxBytes on disk (0: no spool).
+  std::string spoolDir;
+  uint64_t spoolMaxBytes = 1ull << 30;
   int taskDelayMs = 0;      // tests only: hold each lease this long before running it
   int64_t failUnit = -1;    // tests only: a task holding this work unit throws instead of running
 };
@@ -57,6 +64,8 @@ class Worker {
   void reapFinished();
   void releaseSlot(Active* a);  // the task no longer computes: its slot may take the next lease
   void backoff(int& attempt);
+  void spoolLoop();  // uploads spooled films whenever the coordinator answers
+  FilmSpool::Outcome uploadSpooled(const UploadTarget& t, const PartialResult& r);
 
   WorkerOptions opt_;
   CoordinatorClient client_;
@@ -69,6 +78,8 @@ class Worker {
   double heartbeatSeconds_ = 1;
   std::vector<std::unique_ptr<Active>> active_;
   std::map<std::string, std::shared_ptr<const JobPlan>> plans_;
+  std::unique_ptr<FilmSpool> spool_;    // null when spoolMaxBytes is 0
+  std::condition_variable spooled_;     // a film was spooled (guarded by mu_)
   std::unique_ptr<tbb::task_arena> arena_;  // every task's units run here: at most `threads` at once
 };
 

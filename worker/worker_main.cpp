@@ -1,5 +1,6 @@
 // mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
 //   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
+//                  [--spool-dir DIR] [--spool-max-mb MB]
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -27,6 +28,11 @@ int main(int argc, char** argv) {
   if (const char* t = std::getenv("MLTFARM_TOKEN"); t && opt.coordinator.token.empty()) opt.coordinator.token = t;
   app.add_option("--tls-ca", opt.coordinator.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
   app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
+  app.add_option("--spool-dir", opt.spoolDir,
+                 "finished films wait here while the coordinator is away (default: CACHE_DIR/spool)");
+  double spoolMb = double(opt.spoolMaxBytes >> 20);
+  app.add_option("--spool-max-mb", spoolMb, "at most this many MiB of films in the spool (0: no spool)")
+      ->check(CLI::Range(0.0, 1024.0 * 1024.0))->capture_default_str();
   app.add_flag("--drain", opt.drain, "on SIGTERM finish the tasks in hand instead of returning them");
   app.add_option("--debug-task-delay-ms", opt.taskDelayMs, "tests: hold each lease this long before running it")
       ->group("");  // hidden
@@ -34,6 +40,7 @@ int main(int argc, char** argv) {
       ->group("");  // hidden
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  opt.spoolMaxBytes = uint64_t(spoolMb * 1048576.0);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");

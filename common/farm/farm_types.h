@@ -16,7 +16,7 @@ namespace mlt::farm {
 class FarmError : public std::runtime_error {
  public:
   enum class Code { InvalidArgument, NotFound, FailedPrecondition, AlreadyExists, Unauthenticated, Internal,
-                    Unavailable };
+                    Unavailable, ResourceExhausted };  // ResourceExhausted: the coordinator's disk is full
   FarmError(Code code, const std::string& what) : std::runtime_error(what), code_(code) {}
   Code code() const { return code_; }
  private:

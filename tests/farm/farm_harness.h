@@ -114,6 +114,19 @@ struct Farm {
   }
 };
 
+// Expects `f` to throw RpcError with `code` and a message containing `needle`.
+template <class F>
+void expectRpcError(F&& f, grpc::StatusCode code, const std::string& needle, const std::string& what) {
+  try {
+    f();
+    ADD_FAILURE() << what << ": no error";
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), code) << what << ": " << e.what();
+    EXPECT_NE(e.message().find(needle), std::string::npos) << what << ": message '" << e.message() << "' lacks '"
+                                                           << needle << "'";
+  }
+}
+
 // Small, fast settings: 32x32, few mutations, fixed seed.
 inline wire::SubmittedSettings tinySettings(const std::string& method) {
   wire::SubmittedSettings s;

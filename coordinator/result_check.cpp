@@ -1,0 +1,75 @@
+// Checks of an uploaded task result (see result_check.h).
+#include "coordinator/result_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "common/farm/farm_types.h"
+#include "common/mlt/develop.h"
+#include "proto/convert.h"
+
+namespace mlt::farm {
+namespace {
+
+using Code = FarmError::Code;
+
+[[noreturn]] void refuse(const std::string& field, const std::string& what) {
+  throw FarmError(Code::InvalidArgument, fmt::format("{}: {}", field, what));
+}
+
+// Finite and a multiple of 2^-kQuantumExp (exact: scaling by a power of two only moves the exponent).
+bool onGrid(double v) {
+  if (!std::isfinite(v)) return false;
+  const double scaled = std::ldexp(v, kQuantumExp);
+  return std::isfinite(scaled) && scaled == std::floor(scaled);
+}
+
+void checkBuffer(const std::vector<RGBd>& values, const std::string& field, int width) {
+  for (size_t i = 0; i < values.size(); ++i)
+    for (double v : {values[i].r, values[i].g, values[i].b})
+      if (!onGrid(v))
+        refuse(field, fmt::format("pixel ({}, {}) holds {}: every sum must be finite and a multiple of 2^-{}",
+                                  i % size_t(width), i / size_t(width), v, kQuantumExp));
+}
+
+}  // namespace
+
+uint32_t maxSplatLayer(const JobPlan& plan) {
+  const size_t slots = std::max<size_t>({1, plan.norm.mutationsPerLength.size(),
+                                         plan.settings.integrator.maxDepth >= 0 ? size_t(plan.settings.integrator.maxDepth) + 1 : 0});
+  return uint32_t(std::min<size_t>(wire::kMaxSplatLayer, slots + 1));
+}
+
+void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const PartialResult& r) {
+  const int w = plan.settings.width, h = plan.settings.height;
+  if (r.film.width() != w || r.film.height() != h)
+    refuse("partial.width/height", fmt::format("{}x{}, the job renders {}x{}", r.film.width(), r.film.height(), w, h));
+  std::vector<uint32_t> expect;
+  for (uint32_t u = range.begin; u < range.end; ++u) expect.push_back(u);
+  if (r.units != expect)
+    refuse("partial.units", fmt::format("task {} must hold units {}-{}", task, range.begin, range.end - 1));
+  uint64_t samples = 0, pixelSamples = 0;  // mutations or pixel samples; pixel samples each pixel takes
+  for (uint32_t u = range.begin; u < range.end; ++u) {
+    const WorkUnit& unit = plan.units[u];
+    samples += unitWork(plan, unit);
+    if (unit.sampleEnd > unit.sampleBegin) pixelSamples += uint64_t(unit.sampleEnd - unit.sampleBegin);
+  }
+  if (r.samples != samples)
+    refuse("partial.samples", fmt::format("{}, but units {}-{} make {}", r.samples, range.begin, range.end - 1, samples));
+  if (r.film.nonFiniteSamples() > samples + pixelSamples * r.film.pixelCount())
+    refuse("partial.non_finite", fmt::format("{} of {} samples", r.film.nonFiniteSamples(), samples));
+  const uint32_t maxLayer = maxSplatLayer(plan);
+  for (uint32_t l : r.film.splatLayers())
+    if (l > maxLayer) refuse("partial.splat_layers", fmt::format("layer {} (this job fills layers 0-{})", l, maxLayer));
+  // Pixel counts: whole samples, at most the pixel samples the units take.
+  const std::vector<double>& counts = r.film.pixelCounts();
+  for (size_t i = 0; i < counts.size(); ++i)
+    if (!(counts[i] >= 0 && counts[i] <= double(pixelSamples) && counts[i] == std::floor(counts[i])))
+      refuse("partial.pixel_counts", fmt::format("pixel ({}, {}) counts {} samples (whole numbers 0-{})", i % size_t(w),
+                                                 i / size_t(w), counts[i], pixelSamples));
+  checkBuffer(r.film.pixelSums(), "partial.pixel_sums", w);
+  for (uint32_t l : r.film.splatLayers()) checkBuffer(r.film.splatLayer(l), fmt::format("partial.splat_layers[{}]", l), w);
+}
+
+}  // namespace mlt::farm
