@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
 #include "common/methods/image_metadata.h"
 #include "common/methods/registry.h"
+#include "common/methods/veach/veach_chain.h"
 #include "common/methods/veach/veach_job.h"
+#include "common/mlt/develop.h"
 #include "common/render/render_scene.h"
 #include "tests/support/test_scenes.h"
 
@@ -68,6 +71,37 @@ TEST(VeachJob, ReplayMismatchIsRefused) {
   WorkUnit u = plan.units[0];
   u.startContribution *= 1.01;
   EXPECT_THROW(veach::runVeachChain(*scene, plan, u, veach::MutationSettings{}), std::runtime_error);
+}
+
+// A start candidate that rebuilds to no path with f > 0 (door-ajar at 256x256 had one chain in ~10^3 like
+// this, and the job failed) starts its chain from a path resampled from fresh candidates: the chain runs
+// all its mutations, deterministically, with a finite film.
+TEST(VeachJob, StartCandidateWithoutPathFallsBackToResampledStart) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  const RenderSettings settings = smallSettings();
+  const JobPlan plan = veach::planVeachJob(*scene, settings);
+  const veach::PathSpace space(*scene, settings.integrator.maxDepth);
+  // A candidate whose bdpt sample contributes nothing (c = 0): no strategy to start from.
+  uint64_t dead = 0;
+  for (;; ++dead) {
+    ASSERT_LT(dead, 100000u) << "no candidate with c = 0 found";
+    IndependentSource source = IndependentSource::candidate(settings.seed, dead);
+    if (!veach::startPathFromSample(space, settings.integrator, source, 0.5)) break;
+  }
+  WorkUnit u = plan.units[0];
+  u.startCandidate = dead;
+  u.startContribution = 0;
+  const PartialResult a = veach::runVeachChain(*scene, plan, u, veach::MutationSettings{});
+  PartialResult b = veach::runVeachChain(*scene, plan, u, veach::MutationSettings{});
+  EXPECT_EQ(a.samples, u.mutations);
+  PartialResult a2 = a;
+  EXPECT_TRUE(sameFilm(a2.film, b.film));
+  double sum = 0;
+  for (const auto& px : a.film.splatLayer(chainLayer(0))) {
+    ASSERT_TRUE(std::isfinite(px.r) && std::isfinite(px.g) && std::isfinite(px.b));
+    sum += px.r + px.g + px.b;
+  }
+  EXPECT_GT(sum, 0);
 }
 
 TEST(VeachJob, PlanIsThePssmltBdptBootstrap) {

@@ -2,6 +2,7 @@
 #include "common/methods/veach/veach_job.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <cmath>
@@ -22,6 +23,45 @@ namespace mlt::veach {
 namespace {
 constexpr double kReplayTolerance = 1e-5;  // as mlt_job.cpp: the same code on the same numbers
 constexpr int kStartTries = 16;            // a start strategy whose path evaluates to f = 0 is redrawn
+// The bootstrap chose a candidate whose every strategy rebuilds to a path with f = 0 in path space (seen
+// on door-ajar at 256x256: about one chain in 10^3, a connection through the door's gap that the path
+// evaluator's geometry rejects). Such a path is not a state of this chain, so it cannot start one. The
+// chain starts instead from a path resampled from fresh independent candidates in proportion to their c
+// (importance resampling, as the bootstrap does), drawn from a stream of their own so the plan's candidates
+// are untouched. The start only affects the chain's start-up bias (Veach 1997, sec. 11.3.2); b and the
+// chain's weight are unchanged. Deterministic in (job seed, chain index); logged with both.
+std::optional<StartPath> fallbackStart(const PathSpace& space, const RenderSettings& s, const WorkUnit& unit) {
+  constexpr int kFallbackCandidates = 4096, kFallbackPool = 64;
+  const uint64_t streamSeed = hashKeys(s.seed, uint64_t(unit.index), 0xfa11bac5ULL);
+  Pcg32 pick = chainRng(s.seed, unit.index, 5);
+  std::vector<StartPath> pool;
+  double sum = 0;
+  for (int i = 0; i < kFallbackCandidates && int(pool.size()) < kFallbackPool; ++i) {
+    IndependentSource source = IndependentSource::candidate(streamSeed, uint64_t(i));
+    std::optional<StartPath> sp = startPathFromSample(space, s.integrator, source, pick.uniformDouble());
+    if (!sp || !(sp->candidateC > 0)) continue;
+    sum += sp->candidateC;
+    pool.push_back(std::move(*sp));
+  }
+  if (pool.empty())
+    throw std::runtime_error(fmt::format(
+        "veach-mlt: job seed {}, chain {}: neither candidate {} nor {} fresh candidates give a path with f > 0",
+        s.seed, unit.index, unit.startCandidate, kFallbackCandidates));
+  double u = pick.uniformDouble() * sum;
+  size_t chosen = pool.size() - 1;
+  for (size_t i = 0; i < pool.size(); ++i) {
+    if (u < pool[i].candidateC) {
+      chosen = i;
+      break;
+    }
+    u -= pool[i].candidateC;
+  }
+  spdlog::warn("veach-mlt: job seed {}, chain {}: candidate {} has no strategy with f > 0 in path space; the chain "
+               "starts from a path resampled from {} fresh candidates", s.seed, unit.index, unit.startCandidate,
+               pool.size());
+  return std::move(pool[chosen]);
+}
+
 }  // namespace
 
 JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings) {
@@ -52,9 +92,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
           "veach-mlt chain replay mismatch: job seed {}, chain {}, candidate {}: bootstrap recorded c = {:.17g}, "
           "replay gives {:.17g}", s.seed, unit.index, unit.startCandidate, unit.startContribution, sp->candidateC));
   }
-  if (!sp)
-    throw std::runtime_error(fmt::format("veach-mlt: chain {} (candidate {}) has no strategy with f > 0 in {} tries",
-                                         unit.index, unit.startCandidate, kStartTries));
+  if (!sp) sp = fallbackStart(space, s, unit);
 
   VeachChainState state(space, mutations, sp->path, chainRng(s.seed, unit.index, 4));
   VeachChainTarget target(state);
