@@ -12,6 +12,7 @@
 #   BUDGETS=4,16  LONG_SCENES=cornell-box,caustic-mirror  LONG_METHODS=pt,bdpt,mmlt,pssmlt  LONG_BUDGETS=64
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
+#   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
 # The references (bdpt, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
 # the scene's content hash and the settings, so a second regeneration skips them. Two instances with
 # disjoint SCENES (and CPU=0 / CPU=1) can run side by side; run one more with PAGE_ONLY=1 at the end.
@@ -59,7 +60,8 @@ fi
   echo "(settings and the exact \`mltfarm eval\` calls: the script's header). Film ${RES}x${RES}; ${THREADS} thread(s) per run"
   echo "${CPU:+pinned to one core }(equal time: each run's work is calibrated so that the whole job, bootstrap"
   echo "included, fits the budget; the charts plot the real wall time); ${RUNS} runs with different job seeds"
-  echo "per point; every method at ${BUDGETS} s, ${LONG_METHODS} also at ${LONG_BUDGETS} s on ${LONG_SCENES}."
+  echo "per point; every method at ${BUDGETS} s, the leading methods of some scenes also at ${LONG_BUDGETS} s (each"
+  echo "scene's table shows which)."${NOTE:+ $NOTE}
   echo "References: bdpt in 4 independent parts (their spread gives the reference's own noise floor and"
   echo "brightness error, reported per scene). relMSE = mean over pixels and channels of"
   echo "(x - r)^2 / (r^2 + 0.01); brightness = relative error of the image mean. Raw data:"
