@@ -21,6 +21,7 @@
 #include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "worker/coordinator_client.h"
+#include "worker/metrics.h"
 
 namespace mlt::farm {
 
@@ -40,6 +41,8 @@ class Worker {
   // Runs until stop() is called; returns the process exit code.
   int run();
   void stop() { stop_ = true; }
+  // Counted always; served by mltfarm-worker --metrics-listen (worker/metrics.h).
+  WorkerMetrics& metrics() { return metrics_; }
 
  private:
   struct Active {
@@ -50,6 +53,7 @@ class Worker {
     std::thread thread;
   };
   bool registerWithBackoff();
+  std::vector<BundleFile> fetchBundle(const std::string& hash);  // the scene cache's fetch (counted)
   void heartbeatLoop();
   void runTask(Active* a);
   std::shared_ptr<const JobPlan> planFor(const std::string& jobId);
@@ -59,6 +63,7 @@ class Worker {
   void backoff(int& attempt);
 
   WorkerOptions opt_;
+  WorkerMetrics metrics_;
   CoordinatorClient client_;
   SceneCache scenes_;  // bundles by hash on disk, built render scenes in memory
   std::atomic<bool> stop_{false};
