@@ -13,6 +13,7 @@ Exit 77 (ctest: skipped) with the reason when no Chromium is installed.
 usage: browser_test.py TOOLS_DIR SOURCE_DIR SCREENSHOT.png
 """
 import base64
+import fcntl
 import json
 import os
 import re
@@ -46,22 +47,27 @@ class DevTools:
     def __init__(self, binary, workdir):
         to_chrome_r, self.to_chrome = os.pipe()
         self.from_chrome, from_chrome_w = os.pipe()
-
-        def child_fds():
-            os.dup2(to_chrome_r, 3)
-            os.dup2(from_chrome_w, 4)
-
+        # The child's ends above 10, so that moving them to 3 and 4 clobbers nothing.
+        to_chrome_r, from_chrome_w = (self._above_10(to_chrome_r), self._above_10(from_chrome_w))
         args = [binary, "--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 "--no-first-run", "--no-default-browser-check", "--disable-extensions", "--hide-scrollbars",
                 "--remote-debugging-pipe", "--user-data-dir=" + os.path.join(workdir, "chrome-profile"),
                 "about:blank"]
         self.log = open(os.path.join(workdir, "chromium.log"), "w")
-        self.proc = subprocess.Popen(args, preexec_fn=child_fds, pass_fds=(to_chrome_r, from_chrome_w),
+        # The pipe's ends become fds 3 and 4 in Chromium (bash moves them there, then execs it).
+        shell = 'exec "$@" 3<&%d 4>&%d %d<&- %d>&-' % (to_chrome_r, from_chrome_w, to_chrome_r, from_chrome_w)
+        self.proc = subprocess.Popen(["bash", "-c", shell, "chromium"] + args, pass_fds=(to_chrome_r, from_chrome_w),
                                      stdout=self.log, stderr=subprocess.STDOUT)
         os.close(to_chrome_r)
         os.close(from_chrome_w)
         self.buf = b""
         self.next_id = 1
+
+    @staticmethod
+    def _above_10(fd):
+        high = fcntl.fcntl(fd, fcntl.F_DUPFD, 10)
+        os.close(fd)
+        return high
 
     def _read_message(self):
         while b"\0" not in self.buf:
@@ -122,6 +128,7 @@ class DevTools:
 # What the test reads from the job page: the DOM's state badge, the preview's dataset and a digest of the
 # preview's pixels (drawn on a canvas).
 PAGE_STATE = r"""(async () => {
+  if (!document.getElementById("state")) return null;  // not loaded yet
   const img = document.getElementById("preview");
   let digest = null;
   if (img && img.complete && img.naturalWidth > 0) {
@@ -149,7 +156,7 @@ def wait_page(dt, session, pred, what):
     last = None
     while time.time() < end:
         last = dt.eval(session, PAGE_STATE)
-        if pred(last):
+        if last is not None and pred(last):
             return last
         time.sleep(0.1)
     fail("timed out waiting for %s; page: %s" % (what, last))
