@@ -60,7 +60,7 @@ int workerMetricsPort(const std::string& log) {
   for (int i = 0; i < 600; ++i) {
     std::smatch m;
     const std::string text = readFile(log);
-    if (std::regex_search(text, m, std::regex("event=metrics_listening address=[^ ]*:([0-9]+)"))) return std::stoi(m[1]);
+    if (std::regex_search(text, m, std::regex("event=metrics_listening address=[^ ]*:([0-9]+)\n"))) return std::stoi(m[1]);
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ADD_FAILURE() << "the worker did not log its metrics port: " << log;
