@@ -5,7 +5,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/farm/scene_loading.h"
 #include "common/io/png_io.h"
 #include "coordinator/http_server.h"
 #include "tests/farm/farm_harness.h"
@@ -129,15 +128,9 @@ TEST(FarmHttp, JobJsonLivePreviewCancelAndFetch) {
   EXPECT_EQ(workers["workers"][0]["threads"], 1);
 
   // The preview is the develop step's image of the first k tasks (one unit each), byte for byte.
-  SceneDesc desc = loadSceneDesc(cornellBox());
-  RenderSettings rs = s.settings;
-  resolveSettings(rs, s.hasSize, s.hasMaxDepth, s.hasRrDepth, s.hasSpp, desc);
-  auto scene = buildRenderScene(desc, rs.width, rs.height);
-  const JobPlan plan = planJob(*scene, rs);
-  ASSERT_EQ(plan.units.size(), 16u);
-  PartialResult merged;
-  for (int u = 0; u < k; ++u) merged.add(runWorkUnit(*scene, plan, plan.units[u]));
-  EXPECT_EQ(pv->body, pngOf(plan, merged, farm.dir / "expected.png")) << "preview of " << k << " tasks";
+  const LocalUnits local = runUnitsLocally(cornellBox(), s, k);
+  ASSERT_EQ(local.plan.units.size(), 16u);
+  EXPECT_EQ(pv->body, pngOf(local.plan, local.merged, farm.dir / "expected.png")) << "preview of " << k << " tasks";
 
   // Cancel the second job from the API; again is a conflict.
   auto cancelled = http.post("/api/jobs/" + b.jobId + "/cancel");
@@ -169,12 +162,7 @@ TEST(FarmHttp, JobJsonLivePreviewCancelAndFetch) {
 }
 
 TEST(FarmHttp, NonLoopbackAddressNeedsAToken) {
-  TempDir dir;
-  ChildProcess p({toolsDir() + "/mltfarm-coordinator", "--listen", "127.0.0.1:0", "--state-dir", dir / "state",
-                  "--http-listen", "0.0.0.0:0"},
-                 dir / "coordinator.log", true);
-  EXPECT_EQ(p.wait(std::chrono::seconds(30)), 1);
-  EXPECT_NE(readFile(dir / "coordinator.log").find("a non-loopback address needs --token"), std::string::npos);
+  expectCoordinatorRefuses({"--http-listen", "0.0.0.0:0"}, "a non-loopback address needs --token");
   EXPECT_TRUE(isLoopbackHost("127.0.0.1:80"));
   EXPECT_TRUE(isLoopbackHost("[::1]:80"));
   EXPECT_TRUE(isLoopbackHost("localhost:0"));

@@ -153,12 +153,7 @@ TEST(FarmMetrics, CountersMoveDuringARenderAndGaugesCarryTheJob) {
 }
 
 TEST(FarmMetrics, RefusesAnAddressItCannotListenOn) {
-  TempDir dir;
-  ChildProcess p({toolsDir() + "/mltfarm-coordinator", "--listen", "127.0.0.1:0", "--state-dir", dir / "state",
-                  "--metrics-listen", "not-an-address"},
-                 dir / "coordinator.log", true);
-  EXPECT_EQ(p.wait(std::chrono::seconds(30)), 1);
-  EXPECT_NE(readFile(dir / "coordinator.log").find("--metrics-listen not-an-address"), std::string::npos);
+  expectCoordinatorRefuses({"--metrics-listen", "not-an-address"}, "--metrics-listen not-an-address");
 }
 
 TEST(FarmShutdown, HealthIsNotServingBeforeTheDrain) {

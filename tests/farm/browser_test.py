@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The coordinator's web page in a real headless Chromium (the Debian `chromium` package).
 
-Starts a coordinator (--http-listen, with a token) and two workers, submits two jobs with the CLI, then
-drives the page over the DevTools protocol (--remote-debugging-pipe: JSON messages on file descriptors
-3 and 4, no websocket needed):
+Starts a coordinator (--http-listen, with a token), submits two jobs with the CLI, opens the page, starts
+two workers (paused with SIGSTOP while the first preview and the cancel are checked, so that no step
+depends on how fast this machine is), and drives the page over the DevTools protocol
+(--remote-debugging-pipe: JSON messages on file descriptors 3 and 4, no websocket needed):
   - job A's page shows its preview, and the preview's pixels change as tasks are accepted;
   - job B (behind A) is cancelled with the page's Cancel button: the page and the API say CANCELLED;
   - job A reaches DONE on its page, with the finished image, b ± error and the acceptance table;
@@ -18,6 +19,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -193,16 +195,24 @@ def main():
         coord = subprocess.Popen(
             [os.path.join(tools, "mltfarm-coordinator"), "--listen", "127.0.0.1:0", "--state-dir",
              os.path.join(work, "state"), "--token", TOKEN, "--http-listen", "127.0.0.1:0", "--heartbeat", "0.2",
-             "--lease-timeout", "5"],
+             "--lease-timeout", "60"],
             stdout=subprocess.PIPE, stderr=open(os.path.join(work, "coordinator.log"), "w"))
         procs.append(coord)
         address = read_line_with_prefix(coord, "listening on ")
         http_port = int(read_line_with_prefix(coord, "http on ").rsplit(":", 1)[1])
-        for i in range(2):
-            procs.append(subprocess.Popen(
-                [os.path.join(tools, "mltfarm-worker"), "--coordinator", address, "--token", TOKEN, "--threads", "1",
-                 "--cache-dir", os.path.join(work, "cache"), "--debug-task-delay-ms", "400"],
-                stdout=subprocess.DEVNULL, stderr=open(os.path.join(work, "worker-%d.log" % i), "w")))
+        workers = []
+
+        def start_workers():
+            for i in range(2):
+                workers.append(subprocess.Popen(
+                    [os.path.join(tools, "mltfarm-worker"), "--coordinator", address, "--token", TOKEN, "--threads", "1",
+                     "--cache-dir", os.path.join(work, "cache"), "--debug-task-delay-ms", "300"],
+                    stdout=subprocess.DEVNULL, stderr=open(os.path.join(work, "worker-%d.log" % i), "w")))
+                procs.append(workers[-1])
+
+        def signal_workers(sig):
+            for w in workers:
+                w.send_signal(sig)
 
         def submit(name, priority):
             out = subprocess.run(
@@ -215,6 +225,7 @@ def main():
 
         job_a = submit("cornell box (pssmlt)", 0)
         job_b = submit("to be cancelled", -1)  # behind A: no task of B is leased while A has any queued
+        # (no worker yet: nothing runs until the page is open)
         base = "http://127.0.0.1:%d" % http_port
         dt = DevTools(chromium, work)
 
@@ -229,15 +240,22 @@ def main():
         else:
             fail("the job list never showed %s and %s" % (job_a, job_b))
 
-        # Job A: the preview appears, then changes as more chains are accepted.
+        # Job A: the page is open before any worker runs. The workers start, and are paused (SIGSTOP) once
+        # a task is accepted, so that the page's first preview is one of a job still running however slow
+        # this machine is; B (behind A) cannot run meanwhile either.
         page = dt.open_tab(base + "/job.html?id=%s#token=%s" % (job_a, TOKEN))
+        wait_page(dt, page, lambda s: s["state"] in ("QUEUED", "PLANNING", "RUNNING"), "A's page")
+        start_workers()
+        end = time.time() + TIMEOUT
+        while api(http_port, "/api/jobs/" + job_a)["tasks_done"] < 1:
+            if time.time() > end:
+                fail("no task of %s accepted" % job_a)
+            time.sleep(0.02)
+        signal_workers(signal.SIGSTOP)
+        if api(http_port, "/api/jobs/" + job_a)["state"] != "RUNNING":
+            fail("%s finished before the workers were paused" % job_a)
         first = wait_page(dt, page, lambda s: s["digest"] is not None and s["final"] == "0", "A's first preview")
         print("first preview: %s tasks, pixels %08x" % (first["tasks"], first["digest"]))
-        changed = wait_page(dt, page, lambda s: s["digest"] is not None and s["digest"] != first["digest"]
-                            and s["tasks"] != first["tasks"], "A's preview to change")
-        print("changed preview: %s tasks, pixels %08x (final=%s)" % (changed["tasks"], changed["digest"], changed["final"]))
-        if changed["final"] == "0" and int(changed["tasks"]) <= int(first["tasks"]):
-            fail("the preview went back: %s then %s tasks" % (first["tasks"], changed["tasks"]))
 
         # Job B: cancelled with the page's button.
         other = dt.open_tab(base + "/job.html?id=%s#token=%s" % (job_b, TOKEN))
@@ -249,6 +267,14 @@ def main():
         if api(http_port, "/api/jobs/" + job_b)["state"] != "CANCELLED":
             fail("the API does not say %s is CANCELLED" % job_b)
         print("%s cancelled from the page" % job_b)
+
+        # The workers go on: A's preview changes as more chains are accepted.
+        signal_workers(signal.SIGCONT)
+        changed = wait_page(dt, page, lambda s: s["digest"] is not None and s["digest"] != first["digest"]
+                            and s["tasks"] != first["tasks"], "A's preview to change")
+        print("changed preview: %s tasks, pixels %08x (final=%s)" % (changed["tasks"], changed["digest"], changed["final"]))
+        if changed["final"] == "0" and int(changed["tasks"]) <= int(first["tasks"]):
+            fail("the preview went back: %s then %s tasks" % (first["tasks"], changed["tasks"]))
 
         # Job A reaches DONE on its page with the finished image.
         done = wait_page(dt, page, lambda s: s["state"] == "DONE" and s["final"] == "1" and not s["fetchDisabled"],
@@ -274,6 +300,7 @@ def main():
         if dt:
             dt.close()
         for p in reversed(procs):
+            p.send_signal(signal.SIGCONT)  # a paused worker cannot act on SIGTERM
             p.terminate()
         for p in procs:
             try:
