@@ -106,6 +106,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
   rec.sceneFile = bundle.sceneFile;
   rec.submittedAt = unixNow();
   rec.id = store_->insertJob(rec);
+  metrics_.jobsSubmitted.Increment();
   Job job;
   job.rec = rec;
   job.status.jobId = formatJobId(rec.id);

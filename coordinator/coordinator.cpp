@@ -135,6 +135,8 @@ void Coordinator::startRunning(Job& job, bool loadResults) {
   job.merged = emptyPartial(*job.plan);
   job.mergedTasks = 0;
   job.waiting.clear();
+  job.samplesAccepted = 0;
+  job.statsAccepted = {};
   for (uint32_t t : results_->stored(job.rec.id)) {
     if (t >= job.taskState.size()) continue;
     if (!loadResults) {  // a finished job: its image is written, only the count is shown
@@ -157,12 +159,15 @@ void Coordinator::startRunning(Job& job, bool loadResults) {
   job.renderStart = Clock::now();
   refreshProgress(job);
   job.workDoneAtStart = job.status.workDone;
+  job.samplesAtStart = job.samplesAccepted;
   job.status.b = job.plan->norm.b;
   job.status.bStdErr = job.plan->norm.bStdErr;
   job.status.bootstrapSeconds = job.plan->norm.bootstrapSeconds;
 }
 
 void Coordinator::foldAccepted(Job& job, uint32_t task, PartialResult result) {
+  job.samplesAccepted += result.samples;
+  job.statsAccepted.add(result.stats);
   job.waiting.emplace(task, std::move(result));
   // Task order, whatever the arrival order: the sum's bits never depend on which worker was faster.
   for (auto it = job.waiting.begin(); it != job.waiting.end() && it->first == job.mergedTasks;

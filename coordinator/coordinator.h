@@ -26,6 +26,8 @@
 #include "coordinator/handler.h"
 #include "coordinator/job_store.h"
 #include "coordinator/merge.h"
+#include "coordinator/metrics.h"
+#include "coordinator/snapshot.h"
 #include "coordinator/result_store.h"
 
 namespace mlt::farm {
@@ -53,6 +55,13 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   JobStatus cancel(const std::string& jobId) override;
   std::vector<JobStatus> list() override;
   std::string resultPath(const std::string& jobId, const std::string& format) override;
+
+  // For operators (coordinator/snapshot.cpp): every job and worker as of now, and the developed image of a
+  // job's accepted tasks (the preview's develop step, as PNG bytes).
+  FarmSnapshot snapshot();
+  PreviewPng previewPng(const std::string& jobId);  // FarmError NotFound / FailedPrecondition
+  // Event counters and histograms (Prometheus, coordinator/metrics.h); scraped only with --metrics-listen.
+  CoordinatorMetrics& metrics() { return metrics_; }
 
   // WorkerHandler
   Registration registerWorker(const WorkerInfo& info) override;
@@ -82,6 +91,9 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     Clock::time_point renderStart;
     uint64_t workDoneAtStart = 0;  // accepted before this process started (for the ETA)
     uint32_t previewTasks = 0;     // tasks in the last preview
+    uint64_t samplesAccepted = 0;  // pixel samples / mutations of the accepted tasks (metrics, web page)
+    uint64_t samplesAtStart = 0;   // of those, accepted before renderStart (for the rate)
+    ChainStats statsAccepted;      // acceptance of the accepted tasks' chains
     // The accepted results, summed in task order as they arrive: `merged` holds tasks [0, mergedTasks);
     // an accepted task beyond that waits in `waiting` until the tasks before it are in. Only while the
     // job runs (emptied once the image is written).
@@ -137,6 +149,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   void planOne(int64_t id);
 
   CoordinatorOptions opt_;
+  CoordinatorMetrics metrics_;
   std::unique_ptr<JobStore> store_;     // jobs and plans (SQLite)
   std::unique_ptr<ResultStore> results_;  // accepted task results (files)
   std::unique_ptr<Credentials> creds_;    // worker and lease ids that check out (STATE/lease.key)

@@ -1,7 +1,10 @@
 // mltfarm-coordinator: the farm's coordinator process.
 //   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token T] [--tls-cert C --tls-key K]
 // Prints "listening on HOST:PORT" on stdout once serving (scripts and tests read the port from it when
-// --listen ends in :0). SIGINT/SIGTERM shut down gracefully; everything accepted is already on disk.
+// --listen ends in :0), then "metrics on HOST:PORT" (--metrics-listen) and "http on HOST:PORT"
+// (--http-listen) in that order. SIGINT/SIGTERM: health turns NOT_SERVING first (load balancers and
+// Kubernetes readiness probes stop sending new work), --shutdown-grace seconds later the coordinator
+// drains and stops; everything accepted is already on disk.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -9,9 +12,13 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <fmt/format.h>
 #include <semaphore>
+#include <thread>
 
 #include "coordinator/coordinator.h"
+#include "common/farm/metrics_endpoint.h"
+#include "coordinator/http_server.h"
 #include "coordinator/service.h"
 
 namespace {
@@ -42,6 +49,16 @@ int main(int argc, char** argv) {
   app.add_option("--preview-every", opt.previewEverySeconds,
                  "write STATE/jobs/JOB/preview.exr and .png of the tasks accepted so far this often (seconds; 0 = off)")
       ->check(CLI::Range(0.0, 86400.0))->capture_default_str();
+  std::string metricsListen, httpListen;
+  double shutdownGrace = 0;
+  app.add_option("--metrics-listen", metricsListen,
+                 "serve Prometheus metrics on HOST:PORT/metrics (off by default; e.g. 127.0.0.1:9464)");
+  app.add_option("--http-listen", httpListen,
+                 "serve the web page and its JSON API on HOST:PORT (off by default; e.g. 127.0.0.1:8080; "
+                 "the same token; a non-loopback address needs a token)");
+  app.add_option("--shutdown-grace", shutdownGrace,
+                 "on SIGTERM report NOT_SERVING this many seconds before draining (readiness probes notice)")
+      ->check(CLI::Range(0.0, 600.0))->capture_default_str();
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
@@ -49,17 +66,44 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ coordinator %v");
 
   try {
+    if (!httpListen.empty() && server.token.empty() && !mlt::farm::isLoopbackHost(httpListen))
+      throw std::runtime_error(fmt::format("--http-listen {}: a non-loopback address needs --token", httpListen));
     mlt::farm::Coordinator coordinator(opt);
+    server.onUpload = [&coordinator](uint64_t bytes, double seconds) {
+      coordinator.metrics().uploadBytes.Increment(double(bytes));
+      coordinator.metrics().uploadSeconds.Observe(seconds);
+    };
     mlt::farm::RunningServer rs = mlt::farm::startServer(server, coordinator, coordinator);
     std::string host = server.listen.substr(0, server.listen.rfind(':'));
     std::printf("listening on %s:%d\n", host.c_str(), rs.port);
-    std::fflush(stdout);
     spdlog::info("event=listening address={}:{} state_dir={} token={} tls={}", host, rs.port, opt.stateDir,
                  server.token.empty() ? "off" : "on", server.tlsCert.empty() ? "off" : "on");
+    mlt::farm::MetricsEndpoint metrics;
+    if (!metricsListen.empty()) {
+      metrics = mlt::farm::startMetricsEndpoint(
+          metricsListen, {coordinator.metrics().registry, mlt::farm::farmCollector(coordinator)});
+      const std::string mhost = metricsListen.substr(0, metricsListen.rfind(':'));
+      std::printf("metrics on %s:%d\n", mhost.c_str(), metrics.port);
+      spdlog::info("event=metrics_listening address={}:{}", mhost, metrics.port);
+    }
+    std::unique_ptr<mlt::farm::HttpServer> http;
+    if (!httpListen.empty()) {
+      http = std::make_unique<mlt::farm::HttpServer>(coordinator, mlt::farm::HttpOptions{httpListen, server.token});
+      const std::string hhost = httpListen.substr(0, httpListen.rfind(':'));
+      std::printf("http on %s:%d\n", hhost.c_str(), http->port());
+      spdlog::info("event=http_listening address={}:{}", hhost, http->port());
+    }
+    std::fflush(stdout);
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     gStop.acquire();
+    // Not serving first: readiness probes and load balancers stop sending new clients and workers while
+    // the calls in flight finish; then drain.
+    rs.server->GetHealthCheckService()->SetServingStatus(false);
+    spdlog::info("event=not_serving grace_seconds={}", shutdownGrace);
+    if (shutdownGrace > 0) std::this_thread::sleep_for(std::chrono::duration<double>(shutdownGrace));
     spdlog::info("event=shutdown");
+    if (http) http->stop();
     // Stop first: it wakes long polls (LeaseWork, WatchJob) so that the server's shutdown does not wait
     // for them to time out. Handlers still answer (uploads are still stored) until the server is down.
     coordinator.stop();

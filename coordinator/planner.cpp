@@ -65,6 +65,7 @@ void Coordinator::planOne(int64_t id) {
     spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
                  settings.bootstrapSamples);
     plan = std::make_shared<JobPlan>(planJob(*scene, settings));
+    metrics_.bootstrapSeconds.Observe(plan->norm.bootstrapSeconds);
     spdlog::info("job={} event=bootstrap_done b={} b_stderr={} units={} seconds={:.3f}", jobId, plan->norm.b,
                  plan->norm.bStdErr, plan->units.size(), plan->norm.bootstrapSeconds);
     if (plan->units.empty()) error = "the plan has no work units";

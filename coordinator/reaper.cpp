@@ -22,6 +22,7 @@ void Coordinator::reaperLoop() {
         }
         auto job = jobs_.find(it->second.job);
         if (job != jobs_.end() && job->second.taskState[it->second.task] == TaskState::Leased) {
+          metrics_.leasesExpired.Increment();
           spdlog::warn("job={} task={} worker={} lease={} event=lease_expired", job->second.status.jobId,
                        it->second.task, it->second.workerId, it->first);
           taskAttemptFailed(job->second, it->second.task,

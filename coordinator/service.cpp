@@ -169,7 +169,8 @@ class CoordinatorServiceImpl final : public v1::Coordinator::Service {
 
 class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
-  WorkerServiceImpl(WorkerHandler& h, std::string token) : h_(h), token_(std::move(token)) {}
+  WorkerServiceImpl(WorkerHandler& h, std::string token, std::function<void(uint64_t, double)> onUpload)
+      : h_(h), token_(std::move(token)), onUpload_(std::move(onUpload)) {}
 
   Status Register(ServerContext* ctx, const v1::RegisterRequest* req, v1::RegisterResponse* resp) override {
     return guarded(ctx, token_, "Register", [&] {
@@ -240,6 +241,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       v1::UploadResultRequest msg;
       if (!reader->Read(&msg) || !msg.has_header())
         throw wire::WireError("header", "the first message of UploadResult must be the header");
+      const auto t0 = std::chrono::steady_clock::now();
       const v1::UploadHeader header = msg.header();
       wire::checkVersion(header.format_version(), "UploadHeader");
       const v1::PartialHeader& ph = header.partial();
@@ -272,6 +274,8 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
       }
       PartialResult result = wire::fromProto(ph, film);
       UploadReply r = h_.upload(header.worker_id(), header.lease_id(), header.job_id(), header.task_index(), std::move(result));
+      if (onUpload_)
+        onUpload_(film.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       resp->set_accepted(r.accepted);
       resp->set_message(r.message);
       return Status::OK;
@@ -300,6 +304,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
  private:
   WorkerHandler& h_;
   std::string token_;
+  std::function<void(uint64_t, double)> onUpload_;
 };
 
 }  // namespace
@@ -338,7 +343,7 @@ RunningServer startServer(const ServerOptions& options, ClientHandler& clients, 
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   RunningServer rs;
   rs.clientService = std::make_unique<CoordinatorServiceImpl>(clients, options.token);
-  rs.workerService = std::make_unique<WorkerServiceImpl>(workers, options.token);
+  rs.workerService = std::make_unique<WorkerServiceImpl>(workers, options.token, options.onUpload);
   std::shared_ptr<grpc::ServerCredentials> creds;
   if (!options.tlsCert.empty() || !options.tlsKey.empty()) {
     if (options.tlsCert.empty() || options.tlsKey.empty())

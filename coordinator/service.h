@@ -5,6 +5,7 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/impl/codegen/service_type.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -16,6 +17,9 @@ struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // loopback unless told otherwise; port 0 = ephemeral
   std::string token;                       // if set, every call must carry "authorization: Bearer TOKEN"
   std::string tlsCert, tlsKey;             // PEM files; both or neither
+  // Told of every UploadResult that reached the handler: film bytes received, seconds from its first
+  // message to the reply (metrics). Optional.
+  std::function<void(uint64_t bytes, double seconds)> onUpload;
 };
 
 struct RunningServer {

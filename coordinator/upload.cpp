@@ -69,10 +69,12 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
     if (job.status.state != JobState::Running) {
       spdlog::info("job={} task={} worker={} event=upload_ignored state={}", jobId, taskIndex, workerId,
                    jobStateName(job.status.state));
+      metrics_.uploadsRefused.Increment();
       return UploadReply{false, fmt::format("job {} is {}", jobId, jobStateName(job.status.state))};
     }
     if (job.taskState[taskIndex] == TaskState::Accepted) {
       spdlog::warn("job={} task={} worker={} lease={} event=duplicate_dropped", jobId, taskIndex, workerId, leaseId);
+      metrics_.uploadsRefused.Increment();
       return UploadReply{false, fmt::format("task {} of {} was already accepted", taskIndex, jobId)};
     }
     return std::nullopt;
@@ -115,6 +117,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   // checks, even if its lease expired while it was being stored).
   if (auto r = refused(job)) return *r;
   job.taskState[taskIndex] = TaskState::Accepted;
+  metrics_.tasksAccepted.Increment();
   for (auto it = leases_.begin(); it != leases_.end();)
     it = (it->second.job == job.rec.id && it->second.task == taskIndex) ? leases_.erase(it) : std::next(it);
   std::erase(job.pending, taskIndex);

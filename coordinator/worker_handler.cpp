@@ -75,6 +75,7 @@ std::vector<Lease> Coordinator::leaseNow(const std::string& workerId, int maxTas
       leases_[l.leaseId] = {workerId, job->rec.id, t,
                             Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                std::chrono::duration<double>(opt_.leaseTimeoutSeconds))};
+      metrics_.tasksLeased.Increment();
       spdlog::info("job={} task={} units={}-{} worker={} lease={} event=leased", l.jobId, t, l.unitBegin,
                    l.unitEnd - 1, workerId, l.leaseId);
       out.push_back(std::move(l));
@@ -182,6 +183,7 @@ bool Coordinator::taskAttemptFailed(Job& job, uint32_t task, const std::string& 
   job.taskState[task] = TaskState::Pending;
   const uint32_t n = ++job.attempts[task];
   ++job.status.failedAttempts;
+  metrics_.taskFailures.Increment();
   const TaskRange r = job.tasks[task];
   if (job.status.state != JobState::Running) {
     touch(job);
@@ -195,6 +197,7 @@ bool Coordinator::taskAttemptFailed(Job& job, uint32_t task, const std::string& 
     return true;
   }
   job.pending.push_front(task);
+  metrics_.tasksRequeued.Increment();
   spdlog::warn("job={} task={} units={}-{} event=requeued attempt={}/{} error=\"{}\"", job.status.jobId, task, r.begin,
                r.end - 1, n, opt_.maxAttempts, reason);
   touch(job);
@@ -230,7 +233,10 @@ void Coordinator::returnLeases(const std::string& workerId, const std::vector<st
     auto job = jobs_.find(it->second.job);
     if (job != jobs_.end() && job->second.taskState[it->second.task] == TaskState::Leased) {
       job->second.taskState[it->second.task] = TaskState::Pending;
-      if (job->second.status.state == JobState::Running) job->second.pending.push_front(it->second.task);
+      if (job->second.status.state == JobState::Running) {
+        job->second.pending.push_front(it->second.task);
+        metrics_.tasksRequeued.Increment();
+      }
       spdlog::info("job={} task={} worker={} lease={} event=returned", job->second.status.jobId, it->second.task,
                    workerId, id);
       touch(job->second);

@@ -9,6 +9,8 @@ PACKAGES=(
   libembree-dev libopenexr-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libtbb-dev libtinyobjloader-dev libstb-dev libsqlite3-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  prometheus-cpp-dev libcpp-httplib-dev
+  chromium
   python3 python3-matplotlib python3-numpy
   iproute2 procps
 )

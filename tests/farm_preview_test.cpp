@@ -35,15 +35,9 @@ TEST(FarmPreview, PreviewOfAcceptedTasksWhileTheJobRuns) {
   EXPECT_GE(countOccurrences(readFile(farm.dir / "coordinator-0.log"), "event=preview "), 1u);
 
   // The same units in this process: plan, run units 0..units-1, merge, develop.
-  SceneDesc desc = loadSceneDesc(cornellBox());
-  RenderSettings rs = s.settings;
-  resolveSettings(rs, s.hasSize, s.hasMaxDepth, s.hasRrDepth, s.hasSpp, desc);
-  auto scene = buildRenderScene(desc, rs.width, rs.height);
-  const JobPlan plan = planJob(*scene, rs);
-  ASSERT_EQ(plan.units.size(), 16u);
-  PartialResult merged;
-  for (int u = 0; u < units; ++u) merged.add(runWorkUnit(*scene, plan, plan.units[u]));
-  const std::vector<Color> expected = developImage(plan, merged);
+  const LocalUnits local = runUnitsLocally(cornellBox(), s, units);
+  ASSERT_EQ(local.plan.units.size(), 16u);
+  const std::vector<Color> expected = developImage(local.plan, local.merged);
   ASSERT_EQ(expected.size(), early.rgb.size());
   EXPECT_EQ(std::memcmp(expected.data(), early.rgb.data(), expected.size() * sizeof(Color)), 0)
       << "the preview is not the developed image of the first " << units << " units";

@@ -78,10 +78,12 @@ std::vector<BundleFile> CoordinatorClient::scene(const std::string& sceneHash) {
   return fetchScene(*stub_->service, opt_, sceneHash);
 }
 
-JobPlan CoordinatorClient::plan(const std::string& jobId) { return fetchPlan(*stub_->service, opt_, jobId); }
+JobPlan CoordinatorClient::plan(const std::string& jobId, uint64_t* bytes) {
+  return fetchPlan(*stub_->service, opt_, jobId, bytes);
+}
 
-UploadReply CoordinatorClient::upload(const UploadTarget& target, const PartialResult& result) {
-  return uploadPartial(*stub_->service, opt_, target, result);
+UploadReply CoordinatorClient::upload(const UploadTarget& target, const PartialResult& result, uint64_t* filmBytes) {
+  return uploadPartial(*stub_->service, opt_, target, result, nullptr, filmBytes);
 }
 
 FailureReply CoordinatorClient::reportFailure(const std::string& workerId, const Lease& lease,

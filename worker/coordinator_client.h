@@ -33,9 +33,9 @@ class CoordinatorClient {
                            std::chrono::milliseconds deadline);
   // The bundle's files, checked against the hash.
   std::vector<BundleFile> scene(const std::string& sceneHash);
-  JobPlan plan(const std::string& jobId);
-  // Streams the partial film in chunks of at most 1 MiB (worker/uploader.h).
-  UploadReply upload(const UploadTarget& target, const PartialResult& result);
+  JobPlan plan(const std::string& jobId, uint64_t* bytes = nullptr);  // bytes: received on the wire
+  // Streams the partial film in chunks of at most 1 MiB (worker/uploader.h); filmBytes: sent on the wire.
+  UploadReply upload(const UploadTarget& target, const PartialResult& result, uint64_t* filmBytes = nullptr);
   FailureReply reportFailure(const std::string& workerId, const Lease& lease, const std::string& message);
   void returnLeases(const std::string& workerId, const std::vector<std::string>& leaseIds);
 

@@ -11,7 +11,7 @@
 namespace mlt::farm {
 
 UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o, const UploadTarget& target,
-                          const PartialResult& result, size_t* chunks) {
+                          const PartialResult& result, size_t* chunks, uint64_t* filmBytes) {
   // Zero runs left out: most of a task's film is zero words (proto/sparse_film.h), and every byte sent is
   // copied several times on both sides.
   const std::string film = wire::encodeFilmZeroRuns(result.film);
@@ -42,6 +42,7 @@ UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o
   grpc::Status s = writer->Finish();
   if (!s.ok()) throw RpcError(s.error_code(), "UploadResult", s.error_message());
   if (chunks) *chunks = sent;
+  if (filmBytes) *filmBytes = film.size();
   return {resp.accepted(), resp.message()};
 }
 
@@ -72,7 +73,8 @@ std::vector<BundleFile> fetchScene(v1::WorkerService::Stub& stub, const ChannelO
   return out;
 }
 
-JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId) {
+JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId,
+                  uint64_t* bytes) {
   grpc::ClientContext ctx;
   prepareContext(ctx, o, std::chrono::seconds(60));
   v1::FetchPlanRequest req;
@@ -81,6 +83,7 @@ JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const 
   v1::JobPlan resp;
   grpc::Status s = stub.FetchPlan(&ctx, req, &resp);
   if (!s.ok()) throw RpcError(s.error_code(), "FetchPlan", s.error_message());
+  if (bytes) *bytes = resp.ByteSizeLong();
   return wire::fromProto(resp);
 }
 

@@ -19,14 +19,16 @@ struct UploadTarget {
 };
 
 // Streams `result`; returns the coordinator's reply. Throws RpcError on a failed call. `chunks`, if
-// given, receives the number of film chunks sent.
+// given, receives the number of film chunks sent; `filmBytes` the film's size on the wire.
 UploadReply uploadPartial(v1::WorkerService::Stub& stub, const ChannelOptions& o, const UploadTarget& target,
-                          const PartialResult& result, size_t* chunks = nullptr);
+                          const PartialResult& result, size_t* chunks = nullptr, uint64_t* filmBytes = nullptr);
 
 // Fetches a bundle by hash and checks that its content hashes to `sceneHash`.
 std::vector<BundleFile> fetchScene(v1::WorkerService::Stub& stub, const ChannelOptions& o,
                                    const std::string& sceneHash);
 
-JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId);
+// `bytes`, if given, receives the plan's size on the wire.
+JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId,
+                  uint64_t* bytes = nullptr);
 
 }  // namespace mlt::farm

@@ -37,7 +37,20 @@ WorkerOptions withDefaults(WorkerOptions o) {
 Worker::Worker(WorkerOptions options)
     : opt_(withDefaults(std::move(options))),
       client_(opt_.coordinator),
-      scenes_(opt_.cacheDir, [this](const std::string& hash) { return client_.scene(hash); }) {}
+      scenes_(opt_.cacheDir, [this](const std::string& hash) { return fetchBundle(hash); }) {}
+
+namespace {
+thread_local bool tFetchedBundle = false;  // set when this thread's scene lookup had to fetch the bundle
+}  // namespace
+
+std::vector<BundleFile> Worker::fetchBundle(const std::string& hash) {
+  std::vector<BundleFile> files = client_.scene(hash);
+  tFetchedBundle = true;
+  uint64_t bytes = 0;
+  for (const BundleFile& f : files) bytes += f.data.size();
+  metrics_.downloadBytes.Increment(double(bytes));
+  return files;
+}
 
 Worker::~Worker() {
   stop_ = true;
@@ -115,9 +128,15 @@ void Worker::heartbeatLoop() {
 std::shared_ptr<const JobPlan> Worker::planFor(const std::string& jobId) {
   {
     std::lock_guard lock(mu_);
-    if (auto it = plans_.find(jobId); it != plans_.end()) return it->second;
+    if (auto it = plans_.find(jobId); it != plans_.end()) {
+      metrics_.planCacheHits.Increment();
+      return it->second;
+    }
   }
-  auto plan = std::make_shared<const JobPlan>(client_.plan(jobId));
+  uint64_t bytes = 0;
+  auto plan = std::make_shared<const JobPlan>(client_.plan(jobId, &bytes));
+  metrics_.planCacheMisses.Increment();
+  metrics_.downloadBytes.Increment(double(bytes));
   std::lock_guard lock(mu_);
   return plans_.emplace(jobId, plan).first->second;
 }
@@ -131,7 +150,9 @@ void Worker::runTask(Active* a) {
   }
   try {
     auto plan = planFor(l.jobId);
+    tFetchedBundle = false;
     auto scene = scenes_.get(l.sceneHash, l.sceneFile, l.defines, plan->settings.width, plan->settings.height);
+    (tFetchedBundle ? metrics_.sceneCacheMisses : metrics_.sceneCacheHits).Increment();
     for (int slept = 0; slept < opt_.taskDelayMs && !a->cancel; slept += 10)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     if (opt_.failUnit >= int64_t(l.unitBegin) && opt_.failUnit < int64_t(l.unitEnd))
@@ -147,11 +168,14 @@ void Worker::runTask(Active* a) {
     });
     if (!complete) {
       spdlog::info("worker={} job={} task={} event=abandoned", workerId, l.jobId, l.taskIndex);
+      metrics_.tasksAbandoned.Increment();
+      metrics_.tasksRunning.Decrement();
       releaseSlot(a);
       a->finished = true;
       return;
     }
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    metrics_.taskSeconds.Observe(result.seconds);
     // The compute slot is free while the film uploads (and the coordinator stores it): lease the next task
     // now so that a core never waits on the network.
     releaseSlot(a);
@@ -159,7 +183,10 @@ void Worker::runTask(Active* a) {
     const UploadTarget target{workerId, l.leaseId, l.jobId, l.taskIndex};
     while (true) {
       try {
-        UploadReply r = client_.upload(target, result);
+        uint64_t bytes = 0;
+        UploadReply r = client_.upload(target, result, &bytes);
+        metrics_.uploadBytes.Increment(double(bytes));
+        metrics_.tasksUploaded.Increment();
         spdlog::info("worker={} job={} task={} units={}-{} lease={} event=uploaded accepted={} seconds={:.3f} message=\"{}\"",
                      workerId, l.jobId, l.taskIndex, l.unitBegin, l.unitEnd - 1, l.leaseId, r.accepted, result.seconds,
                      r.message);
@@ -182,8 +209,10 @@ void Worker::runTask(Active* a) {
                   l.leaseId, e.what());
     // A coordinator that cannot be reached gets no report: the lease expires there and is counted then.
     const auto* rpc = dynamic_cast<const RpcError*>(&e);
+    (a->cancel ? metrics_.tasksAbandoned : metrics_.tasksFailed).Increment();
     if (!a->cancel && !(rpc && isTransient(rpc->code()))) reportFailure(l, workerId, e.what());
   }
+  metrics_.tasksRunning.Decrement();
   releaseSlot(a);
   a->finished = true;
   slotFreed_.notify_all();
@@ -191,7 +220,10 @@ void Worker::runTask(Active* a) {
 
 FilmSpool::Outcome Worker::uploadSpooled(const UploadTarget& t, const PartialResult& r) {
   try {
-    UploadReply reply = client_.upload(t, r);
+    uint64_t bytes = 0;
+    UploadReply reply = client_.upload(t, r, &bytes);
+    metrics_.uploadBytes.Increment(double(bytes));
+    metrics_.tasksUploaded.Increment();
     spdlog::info("worker={} job={} task={} lease={} event=uploaded_from_spool accepted={} message=\"{}\"", t.workerId,
                  t.jobId, t.taskIndex, t.leaseId, reply.accepted, reply.message);
     return FilmSpool::Outcome::Done;
@@ -314,6 +346,7 @@ int Worker::run() {
       auto a = std::make_unique<Active>();
       a->lease = std::move(lease);
       Active* raw = a.get();
+      metrics_.tasksRunning.Increment();
       std::lock_guard lock(mu_);
       active_.push_back(std::move(a));
       raw->thread = std::thread([this, raw] { runTask(raw); });

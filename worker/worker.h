@@ -24,6 +24,7 @@
 #include "common/render/render_scene.h"
 #include "worker/coordinator_client.h"
 #include "worker/spool.h"
+#include "worker/metrics.h"
 
 namespace mlt::farm {
 
@@ -47,6 +48,8 @@ class Worker {
   // Runs until stop() is called; returns the process exit code.
   int run();
   void stop() { stop_ = true; }
+  // Counted always; served by mltfarm-worker --metrics-listen (worker/metrics.h).
+  WorkerMetrics& metrics() { return metrics_; }
 
  private:
   struct Active {
@@ -57,6 +60,7 @@ class Worker {
     std::thread thread;
   };
   bool registerWithBackoff();
+  std::vector<BundleFile> fetchBundle(const std::string& hash);  // the scene cache's fetch (counted)
   void heartbeatLoop();
   void runTask(Active* a);
   std::shared_ptr<const JobPlan> planFor(const std::string& jobId);
@@ -68,6 +72,7 @@ class Worker {
   FilmSpool::Outcome uploadSpooled(const UploadTarget& t, const PartialResult& r);
 
   WorkerOptions opt_;
+  WorkerMetrics metrics_;
   CoordinatorClient client_;
   SceneCache scenes_;  // bundles by hash on disk, built render scenes in memory
   std::atomic<bool> stop_{false};

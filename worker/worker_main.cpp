@@ -1,6 +1,7 @@
 // mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
 //   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
 //                  [--spool-dir DIR] [--spool-max-mb MB]
+//                  [--metrics-listen HOST:PORT]
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -9,6 +10,7 @@
 #include <csignal>
 #include <cstdlib>
 
+#include "common/farm/metrics_endpoint.h"
 #include "worker/worker.h"
 
 namespace {
@@ -38,6 +40,9 @@ int main(int argc, char** argv) {
       ->group("");  // hidden
   app.add_option("--debug-fail-unit", opt.failUnit, "tests: a task holding this work unit fails (throws)")
       ->group("");  // hidden
+  std::string metricsListen;
+  app.add_option("--metrics-listen", metricsListen,
+                 "serve Prometheus metrics on HOST:PORT/metrics (off by default; port 0 = ephemeral, logged)");
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   opt.spoolMaxBytes = uint64_t(spoolMb * 1048576.0);
@@ -46,6 +51,12 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");
   try {
     mlt::farm::Worker worker(opt);
+    mlt::farm::MetricsEndpoint metrics;
+    if (!metricsListen.empty()) {
+      metrics = mlt::farm::startMetricsEndpoint(metricsListen, {worker.metrics().registry});
+      spdlog::info("event=metrics_listening address={}:{}", metricsListen.substr(0, metricsListen.rfind(':')),
+                   metrics.port);
+    }
     gWorker = &worker;
     std::signal(SIGTERM, onSignal);
     std::signal(SIGINT, onSignal);

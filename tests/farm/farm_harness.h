@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/farm/scene_loading.h"
 #include "coordinator/client.h"
 #include "coordinator/process.h"
 
@@ -125,6 +126,32 @@ void expectRpcError(F&& f, grpc::StatusCode code, const std::string& needle, con
     EXPECT_NE(e.message().find(needle), std::string::npos) << what << ": message '" << e.message() << "' lacks '"
                                                            << needle << "'";
   }
+}
+
+// `mltfarm-coordinator` started with `flags` exits 1 and its log says `message`.
+inline void expectCoordinatorRefuses(const std::vector<std::string>& flags, const std::string& message) {
+  TempDir dir;
+  std::vector<std::string> argv{toolsDir() + "/mltfarm-coordinator", "--listen", "127.0.0.1:0", "--state-dir", dir / "state"};
+  argv.insert(argv.end(), flags.begin(), flags.end());
+  ChildProcess p(argv, dir / "coordinator.log", true);
+  EXPECT_EQ(p.wait(std::chrono::seconds(30)), 1);
+  EXPECT_NE(readFile(dir / "coordinator.log").find(message), std::string::npos) << readFile(dir / "coordinator.log");
+}
+
+// The first `units` work units of a job, planned, run and merged in this process as the farm does them.
+struct LocalUnits {
+  JobPlan plan;
+  PartialResult merged;
+};
+inline LocalUnits runUnitsLocally(const std::string& sceneFile, const wire::SubmittedSettings& s, int units) {
+  SceneDesc desc = loadSceneDesc(sceneFile);
+  RenderSettings rs = s.settings;
+  resolveSettings(rs, s.hasSize, s.hasMaxDepth, s.hasRrDepth, s.hasSpp, desc);
+  auto scene = buildRenderScene(desc, rs.width, rs.height);
+  LocalUnits out{planJob(*scene, rs), {}};
+  for (int u = 0; u < units && u < int(out.plan.units.size()); ++u)
+    out.merged.add(runWorkUnit(*scene, out.plan, out.plan.units[u]));
+  return out;
 }
 
 // Small, fast settings: 32x32, few mutations, fixed seed.
