@@ -1,5 +1,8 @@
 // mltfarm-coordinator: the farm's coordinator process.
-//   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token T] [--tls-cert C --tls-key K]
+//   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token-file F] [--tls-cert C --tls-key K
+//                       [--tls-client-ca CA]] [--insecure]
+// The token comes from --token-file or $MLTFARM_TOKEN, never from argv. A non-loopback --listen needs a
+// token or client certificates, or --insecure.
 // Prints "listening on HOST:PORT" on stdout once serving (scripts and tests read the port from it when
 // --listen ends in :0). SIGINT/SIGTERM shut down gracefully; everything accepted is already on disk.
 #include <CLI/CLI.hpp>
@@ -11,8 +14,11 @@
 #include <cstdlib>
 #include <semaphore>
 
+#include "coordinator/auth.h"
 #include "coordinator/coordinator.h"
+#include "coordinator/crash_point.h"
 #include "coordinator/service.h"
+#include "proto/channel.h"
 
 namespace {
 std::binary_semaphore gStop{0};
@@ -27,10 +33,16 @@ int main(int argc, char** argv) {
   app.add_option("--listen", server.listen, "address to listen on (loopback by default; port 0 = ephemeral)")
       ->capture_default_str();
   app.add_option("--state-dir", opt.stateDir, "state directory (SQLite database, scenes, results)")->required();
-  app.add_option("--token", server.token, "shared token every call must carry (default: none)");
-  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && server.token.empty()) server.token = t;
+  std::string tokenFile, argvToken;
+  app.add_option("--token-file", tokenFile,
+                 "file holding the shared token every call must carry (default: $MLTFARM_TOKEN, else none)");
+  app.add_option("--token", argvToken, "removed: use --token-file or MLTFARM_TOKEN")->group("");  // hidden
   app.add_option("--tls-cert", server.tlsCert, "PEM certificate chain (enables TLS)");
   app.add_option("--tls-key", server.tlsKey, "PEM private key");
+  app.add_option("--tls-client-ca", server.tlsClientCa,
+                 "PEM CA certificate: every client must present a certificate it signed (mutual TLS)");
+  app.add_flag("--insecure", server.insecure,
+               "listen on a non-loopback address with neither a token nor client certificates");
   app.add_option("--lease-timeout", opt.leaseTimeoutSeconds, "seconds before an unrenewed lease is requeued")
       ->check(CLI::Range(0.2, 3600.0))->capture_default_str();
   app.add_option("--heartbeat", opt.heartbeatSeconds, "heartbeat interval told to workers (seconds)")
@@ -42,6 +54,9 @@ int main(int argc, char** argv) {
   app.add_option("--preview-every", opt.previewEverySeconds,
                  "write STATE/jobs/JOB/preview.exr and .png of the tasks accepted so far this often (seconds; 0 = off)")
       ->check(CLI::Range(0.0, 86400.0))->capture_default_str();
+  std::string crashAt;
+  app.add_option("--debug-crash-at", crashAt, "tests: SIGKILL itself at a named point (coordinator/crash_point.h)")
+      ->group("");  // hidden
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
@@ -49,13 +64,18 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ coordinator %v");
 
   try {
+    if (!argvToken.empty()) throw std::runtime_error(mlt::farm::tokenOnCommandLineError());
+    server.token = mlt::farm::loadToken(tokenFile);
+    mlt::farm::checkListenPolicy(server);  // before the state directory is touched
+    if (!crashAt.empty()) mlt::farm::armCrashPoint(crashAt);
     mlt::farm::Coordinator coordinator(opt);
     mlt::farm::RunningServer rs = mlt::farm::startServer(server, coordinator, coordinator);
     std::string host = server.listen.substr(0, server.listen.rfind(':'));
     std::printf("listening on %s:%d\n", host.c_str(), rs.port);
     std::fflush(stdout);
     spdlog::info("event=listening address={}:{} state_dir={} token={} tls={}", host, rs.port, opt.stateDir,
-                 server.token.empty() ? "off" : "on", server.tlsCert.empty() ? "off" : "on");
+                 server.token.empty() ? "off" : "on",
+                 server.tlsCert.empty() ? "off" : server.tlsClientCa.empty() ? "server" : "mutual");
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     gStop.acquire();

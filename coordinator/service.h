@@ -16,6 +16,8 @@ struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // loopback unless told otherwise; port 0 = ephemeral
   std::string token;                       // if set, every call must carry "authorization: Bearer TOKEN"
   std::string tlsCert, tlsKey;             // PEM files; both or neither
+  std::string tlsClientCa;                 // PEM CA: client certificates are required and checked (mutual TLS)
+  bool insecure = false;                   // allow a non-loopback address with neither token nor client CA
 };
 
 struct RunningServer {

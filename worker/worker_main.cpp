@@ -1,5 +1,7 @@
 // mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
-//   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
+//   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token-file F] [--tls-ca CA.pem [--tls-cert C --tls-key K]]
+//                  [--cache-dir DIR]
+// The token comes from --token-file or $MLTFARM_TOKEN, never from argv.
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -23,9 +25,14 @@ int main(int argc, char** argv) {
   std::string logLevel = "info";
   app.add_option("--coordinator", opt.coordinator.address, "coordinator address HOST:PORT")->required();
   app.add_option("--threads", opt.threads, "tasks run in parallel (default: all cores)")->check(CLI::Range(0, 4096));
-  app.add_option("--token", opt.coordinator.token, "shared token (or MLTFARM_TOKEN)");
-  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && opt.coordinator.token.empty()) opt.coordinator.token = t;
+  std::string tokenFile, argvToken;
+  app.add_option("--token-file", tokenFile, "file holding the shared token (default: $MLTFARM_TOKEN, else none)");
+  app.add_option("--token", argvToken, "removed: use --token-file or MLTFARM_TOKEN")->group("");  // hidden
   app.add_option("--tls-ca", opt.coordinator.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
+  app.add_option("--tls-cert", opt.coordinator.tlsCert, "PEM client certificate chain (mutual TLS)");
+  app.add_option("--tls-key", opt.coordinator.tlsKey, "PEM private key of the client certificate");
+  app.add_option("--tls-server-name", opt.coordinator.tlsServerName,
+                 "name the coordinator's certificate carries, when not the host of --coordinator");
   app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
   app.add_flag("--drain", opt.drain, "on SIGTERM finish the tasks in hand instead of returning them");
   app.add_option("--debug-task-delay-ms", opt.taskDelayMs, "tests: hold each lease this long before running it")
@@ -38,6 +45,8 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");
   try {
+    if (!argvToken.empty()) throw std::runtime_error(mlt::farm::tokenOnCommandLineError());
+    opt.coordinator.token = mlt::farm::loadToken(tokenFile);
     mlt::farm::Worker worker(opt);
     gWorker = &worker;
     std::signal(SIGTERM, onSignal);
