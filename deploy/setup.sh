@@ -10,7 +10,7 @@ PACKAGES=(
   libtbb-dev libtinyobjloader-dev libstb-dev libsqlite3-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
-  iproute2 procps
+  iproute2 procps openssl
 )
 
 missing=()
