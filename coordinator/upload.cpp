@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/crash_point.h"
 
 namespace fs = std::filesystem;
 
@@ -62,6 +63,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
     plan = job.plan;
     identity = {job.status.jobId, job.rec.sceneHash, job.rec.sceneFile};
   }
+  crashPoint("upload-received");
   // Persist before acknowledging: nothing accepted is lost.
   results_->put(id, taskIndex, result);
   if (opt_.keepPartials) {
@@ -90,6 +92,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   } else {
     touch(job);
   }
+  crashPoint("upload-recorded");
   return {true, "accepted"};
 }
 
