@@ -106,7 +106,7 @@ TEST(FarmAuth, NonLoopbackListenNeedsATokenOrInsecure) {
   const std::string log = readFile(dir / "open.log");
   EXPECT_NE(log.find("not a loopback address"), std::string::npos) << log;
   EXPECT_NE(log.find("--insecure"), std::string::npos) << log;
-  EXPECT_FALSE(fs::exists(dir / "open" / "farm.db")) << "refused before touching the state directory";
+  EXPECT_FALSE(fs::exists(fs::path(dir / "open") / "farm.db")) << "refused before touching the state directory";
 
   // With a token (from its file), or when told --insecure, it serves; the token is checked.
   writeFileDurably(dir / "token", "s3cret", 0600);

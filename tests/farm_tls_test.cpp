@@ -5,6 +5,8 @@
 // coordinator listening on all interfaces with no token (the certificates authenticate).
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cstdlib>
 
 #include "tests/farm/farm_harness.h"
