@@ -39,7 +39,7 @@ TEST(FarmAuth, ConstantTimeEqualsComparesWholeValues) {
   EXPECT_TRUE(constantTimeEquals("Bearer s3cret", "Bearer s3cret"));
   EXPECT_FALSE(constantTimeEquals("Bearer s3cret", "Bearer s3creT"));  // last byte
   EXPECT_FALSE(constantTimeEquals("Bearer s3cret", "Bearer s3cre"));   // a prefix
-  EXPECT_FALSE(constantTimeEquals("Bearer s3cret", "Bearer s3cret\0"));
+  EXPECT_FALSE(constantTimeEquals("Bearer s3cret", std::string_view("Bearer s3cret\0", 14)));
   EXPECT_FALSE(constantTimeEquals(std::string_view("a\0b", 3), std::string_view("a\0c", 3)));  // past a NUL
   EXPECT_FALSE(constantTimeEquals("", "x"));
 }

@@ -17,6 +17,8 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 
+#include <fmt/format.h>
+
 #include <cstdlib>
 #include <random>
 #include <set>
@@ -180,6 +182,7 @@ TEST(FarmFuzz, BundleWriterKeepsEveryFileInsideTheBundle) {
   runIsolated("bundle", dir.path, [&](auto progress) {
     Rng rng(kSeed);
     const std::string sandbox = dir / "sandbox";
+    fs::create_directories(sandbox);
     const std::vector<std::string> kPaths = {"scene.xml", "meshes/a.obj", "a/b/c/d.ply", "../escaped",
                                              "a/../../escaped", "/" + (dir / "escaped"), "a//b", "a\\b", "", ".", "..",
                                              "./a", "a/./b", "a/", std::string(300, 'x'), std::string("nul\0x", 5),

@@ -33,6 +33,9 @@ void validateBundlePath(const std::string& path) {
   if (path.empty()) bad("empty");
   if (path.front() == '/') bad("absolute paths are not allowed");
   if (path.find('\\') != std::string::npos) bad("backslashes are not allowed");
+  // A NUL ends the name the file system sees (the file written would not be the file hashed).
+  if (std::any_of(path.begin(), path.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+    bad("control characters (NUL, newline, ...) are not allowed");
   size_t start = 0;
   while (start <= path.size()) {
     size_t end = path.find('/', start);
