@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <thread>
 
+#include "common/core/durable_file.h"
 #include "common/farm/bundle.h"
 #include "common/farm/scene_loading.h"
 #include "common/job/mlt_job.h"
@@ -65,6 +66,7 @@ JobStatus Coordinator::submit(SubmitRequest req) {
     std::error_code ec;
     fs::rename(tmp, dir, ec);  // another submit of the same bundle may have won: same bytes
     if (ec) fs::remove_all(tmp, ec);
+    else syncDirectory(fs::path(dir).parent_path().string());  // the rename is on disk before the job is
   }
   // 2. Load and validate the scene exactly as the workers will.
   SceneDesc desc = loadSceneDesc((fs::path(dir) / bundle.sceneFile).string(), req.defines);

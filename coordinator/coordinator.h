@@ -113,6 +113,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   };
 
   void recover();                          // reload the state directory (recovery.cpp)
+  bool finalImagesExist(int64_t id) const;  // image.exr and image.png of a DONE job (recovery.cpp)
   Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
   void touch(Job& job);                    // bump version, notify watchers; caller holds mu_
   void refreshProgress(Job& job);

@@ -1,5 +1,8 @@
 // mltfarm-coordinator: the farm's coordinator process.
-//   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token T] [--tls-cert C --tls-key K]
+//   mltfarm-coordinator --listen 127.0.0.1:50051 --state-dir DIR [--token-file F] [--tls-cert C --tls-key K
+//                       [--tls-client-ca CA]] [--insecure]
+// The token comes from --token-file or $MLTFARM_TOKEN, never from argv. A non-loopback --listen needs a
+// token or client certificates, or --insecure.
 // Prints "listening on HOST:PORT" on stdout once serving (scripts and tests read the port from it when
 // --listen ends in :0), then "metrics on HOST:PORT" (--metrics-listen) and "http on HOST:PORT"
 // (--http-listen) in that order. SIGINT/SIGTERM: health turns NOT_SERVING first (load balancers and
@@ -16,10 +19,13 @@
 #include <semaphore>
 #include <thread>
 
+#include "coordinator/auth.h"
 #include "coordinator/coordinator.h"
 #include "common/farm/metrics_endpoint.h"
 #include "coordinator/http_server.h"
+#include "coordinator/crash_point.h"
 #include "coordinator/service.h"
+#include "proto/channel.h"
 
 namespace {
 std::binary_semaphore gStop{0};
@@ -34,10 +40,16 @@ int main(int argc, char** argv) {
   app.add_option("--listen", server.listen, "address to listen on (loopback by default; port 0 = ephemeral)")
       ->capture_default_str();
   app.add_option("--state-dir", opt.stateDir, "state directory (SQLite database, scenes, results)")->required();
-  app.add_option("--token", server.token, "shared token every call must carry (default: none)");
-  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && server.token.empty()) server.token = t;
+  std::string tokenFile, argvToken;
+  app.add_option("--token-file", tokenFile,
+                 "file holding the shared token every call must carry (default: $MLTFARM_TOKEN, else none)");
+  app.add_option("--token", argvToken, "removed: use --token-file or MLTFARM_TOKEN")->group("");  // hidden
   app.add_option("--tls-cert", server.tlsCert, "PEM certificate chain (enables TLS)");
   app.add_option("--tls-key", server.tlsKey, "PEM private key");
+  app.add_option("--tls-client-ca", server.tlsClientCa,
+                 "PEM CA certificate: every client must present a certificate it signed (mutual TLS)");
+  app.add_flag("--insecure", server.insecure,
+               "listen on a non-loopback address with neither a token nor client certificates");
   app.add_option("--lease-timeout", opt.leaseTimeoutSeconds, "seconds before an unrenewed lease is requeued")
       ->check(CLI::Range(0.2, 3600.0))->capture_default_str();
   app.add_option("--heartbeat", opt.heartbeatSeconds, "heartbeat interval told to workers (seconds)")
@@ -59,6 +71,9 @@ int main(int argc, char** argv) {
   app.add_option("--shutdown-grace", shutdownGrace,
                  "on SIGTERM report NOT_SERVING this many seconds before draining (readiness probes notice)")
       ->check(CLI::Range(0.0, 600.0))->capture_default_str();
+  std::string crashAt;
+  app.add_option("--debug-crash-at", crashAt, "tests: SIGKILL itself at a named point (coordinator/crash_point.h)")
+      ->group("");  // hidden
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
@@ -66,8 +81,12 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ coordinator %v");
 
   try {
+    if (!argvToken.empty()) throw std::runtime_error(mlt::farm::tokenOnCommandLineError());
+    server.token = mlt::farm::loadToken(tokenFile);
+    mlt::farm::checkListenPolicy(server);  // before the state directory is touched
+    if (!crashAt.empty()) mlt::farm::armCrashPoint(crashAt);
     if (!httpListen.empty() && server.token.empty() && !mlt::farm::isLoopbackHost(httpListen))
-      throw std::runtime_error(fmt::format("--http-listen {}: a non-loopback address needs --token", httpListen));
+      throw std::runtime_error(fmt::format("--http-listen {}: a non-loopback address needs a token (--token-file or MLTFARM_TOKEN)", httpListen));
     mlt::farm::Coordinator coordinator(opt);
     server.onUpload = [&coordinator](uint64_t bytes, double seconds) {
       coordinator.metrics().uploadBytes.Increment(double(bytes));
@@ -77,7 +96,8 @@ int main(int argc, char** argv) {
     std::string host = server.listen.substr(0, server.listen.rfind(':'));
     std::printf("listening on %s:%d\n", host.c_str(), rs.port);
     spdlog::info("event=listening address={}:{} state_dir={} token={} tls={}", host, rs.port, opt.stateDir,
-                 server.token.empty() ? "off" : "on", server.tlsCert.empty() ? "off" : "on");
+                 server.token.empty() ? "off" : "on",
+                 server.tlsCert.empty() ? "off" : server.tlsClientCa.empty() ? "server" : "mutual");
     mlt::farm::MetricsEndpoint metrics;
     if (!metricsListen.empty()) {
       metrics = mlt::farm::startMetricsEndpoint(

@@ -10,6 +10,7 @@
 #include <random>
 #include <thread>
 
+#include "common/core/durable_file.h"
 #include "coordinator/client.h"
 #include "coordinator/process.h"
 
@@ -31,17 +32,19 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
   }
   const std::string bin = farmBinaryDir();
   std::random_device rd;
-  const std::string token = fmt::format("{:08x}{:08x}{:08x}", rd(), rd(), rd());
+  const std::string token = fmt::format("{:08x}{:08x}{:08x}{:08x}", rd(), rd(), rd(), rd());
+  const std::string tokenFile = result.stateDir + "/token";  // never on argv: ps shows argv to everyone
+  writeFileDurably(tokenFile, token, 0600);
   const int W = o.workers > 0 ? o.workers : int(std::max(1u, std::thread::hardware_concurrency()));
 
   CoordinatorProcess coord = startCoordinatorProcess(
       bin + "/mltfarm-coordinator",
-      {"--state-dir", result.stateDir, "--token", token, "--heartbeat", "0.5", "--lease-timeout", "10"},
+      {"--state-dir", result.stateDir, "--token-file", tokenFile, "--heartbeat", "0.5", "--lease-timeout", "10"},
       result.stateDir + "/coordinator.log");
   std::vector<ChildProcess> workers;
   for (int i = 0; i < W; ++i)
     workers.emplace_back(std::vector<std::string>{bin + "/mltfarm-worker", "--coordinator", coord.address, "--threads",
-                                                  std::to_string(o.threadsPerWorker), "--token", token, "--cache-dir",
+                                                  std::to_string(o.threadsPerWorker), "--token-file", tokenFile, "--cache-dir",
                                                   result.stateDir + "/worker-cache"},
                          fmt::format("{}/worker-{}.log", result.stateDir, i), false);
   result.startupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

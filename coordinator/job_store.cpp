@@ -74,9 +74,11 @@ JobStore::JobStore(const std::string& path) : path_(path) {
     throw std::runtime_error(fmt::format("{}: cannot open database: {}", path, msg));
   }
   sqlite3_busy_timeout(db_, 5000);
-  // WAL + synchronous=NORMAL survives a killed process (only a power loss may lose the last commit).
+  // WAL + synchronous=FULL: a commit (a job submitted, planned, done) is on disk when it returns, even
+  // through a power loss; NORMAL would survive only a killed process. Accepted results are files
+  // (result_store.h), written durably too.
   exec("PRAGMA journal_mode=WAL");
-  exec("PRAGMA synchronous=NORMAL");
+  exec("PRAGMA synchronous=FULL");
   exec("CREATE TABLE IF NOT EXISTS jobs("
        " id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT, priority INTEGER, state INTEGER,"
        " settings BLOB, scene_hash TEXT, scene_file TEXT, plan BLOB, tasks INTEGER, error TEXT,"

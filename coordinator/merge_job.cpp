@@ -8,7 +8,9 @@
 #include <optional>
 
 #include "common/job/mlt_job.h"
+#include "common/core/durable_file.h"
 #include "coordinator/coordinator.h"
+#include "coordinator/crash_point.h"
 
 namespace fs = std::filesystem;
 
@@ -36,8 +38,11 @@ void Coordinator::merge(int64_t id) {
     fs::create_directories(dir);
     writeFinalImages((dir / "image.tmp.exr").string(), (dir / "image.tmp.png").string(), identity, *plan, merged);
     if (isMarkovChainMethod(plan->settings.method)) refined = refinedB(plan->norm, merged.stats);
-    fs::rename(dir / "image.tmp.exr", dir / "image.exr");
-    fs::rename(dir / "image.tmp.png", dir / "image.png");
+    crashPoint("final-merge");
+    // Durable before the job is DONE: a DONE job's image survives a power loss (and if it is missing
+    // anyway, the restart merges it again, recovery.cpp).
+    commitFileDurably((dir / "image.tmp.png").string(), (dir / "image.png").string());
+    commitFileDurably((dir / "image.tmp.exr").string(), (dir / "image.exr").string());
   } catch (const std::exception& e) {
     error = e.what();
   }

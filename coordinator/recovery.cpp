@@ -1,12 +1,29 @@
 // Restart: every job of the state directory comes back as it was left (see coordinator.h). A job that
 // was planning is queued again (the bootstrap is a pure function of the job: it reruns to the same
-// plan); a running job keeps its accepted tasks and requeues the rest; a finished one keeps its image.
+// plan); a running job keeps its accepted tasks and requeues the rest; a finished one keeps its image,
+// or is merged again if its image is missing.
 #include <spdlog/spdlog.h>
+
+#include <filesystem>
 
 #include "coordinator/coordinator.h"
 #include "proto/convert.h"
 
 namespace mlt::farm {
+
+namespace {
+
+bool fileExists(const std::filesystem::path& p) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(p, ec);
+}
+
+}  // namespace
+
+bool Coordinator::finalImagesExist(int64_t id) const {
+  const std::filesystem::path dir = jobDir(id);
+  return fileExists(dir / "image.exr") && fileExists(dir / "image.png");
+}
 
 void Coordinator::recover() {
   for (JobRecord& rec : store_->loadJobs()) {
@@ -37,6 +54,12 @@ void Coordinator::recover() {
     auto& j = jobs_.emplace(id, std::move(job)).first->second;
     if (state == JobState::Planning || (state == JobState::Queued) || (!isTerminal(state) && !j.plan)) {
       state = JobState::Queued;
+    }
+    if (state == JobState::Done && !finalImagesExist(id)) {
+      // DONE in the database but the image is gone (deleted, or lost with a disk that did not keep it):
+      // merge it again from the stored results (a task whose result is missing too is rendered again).
+      spdlog::warn("job={} event=image_missing action=merge_again", j.status.jobId);
+      state = JobState::Merging;
     }
     j.status.state = state;
     if (j.plan && (state == JobState::Running || state == JobState::Merging || state == JobState::Done)) {

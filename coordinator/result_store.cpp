@@ -1,7 +1,6 @@
 // Accepted task results as files (see result_store.h).
 #include "coordinator/result_store.h"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -12,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/core/durable_file.h"
 #include "coordinator/storage_error.h"
 #include "proto/convert.h"
 
@@ -51,21 +51,16 @@ void ResultStore::put(int64_t job, uint32_t task, const PartialResult& result) c
   const uint64_t sum = checksum(blob.data(), blob.size());
   const std::string final = path(job, task);
   fs::create_directories(fs::path(final).parent_path());
-  // A name of its own per writer: two uploads of one task may race (both write the same bytes).
-  const std::string tmp = fmt::format("{}.tmp-{}-{}", final, getpid(), std::hash<const void*>()(&blob));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(kMagic, sizeof kMagic);
-    out.write(blob.data(), std::streamsize(blob.size()));
-    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
-    if (!out.flush()) {
-      const int err = errno;  // ENOSPC: a full disk answers RESOURCE_EXHAUSTED (storage_error.h)
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw storageError(fmt::format("{}: cannot write the result of task {}", tmp, task), err);
-    }
+  // Durable before the upload is acknowledged: temporary file, fsync, rename, fsync the directory. A full
+  // disk answers RESOURCE_EXHAUSTED, any other refusal UNAVAILABLE (storage_error.h).
+  std::string bytes;
+  bytes.reserve(sizeof kMagic + blob.size() + sizeof sum);
+  bytes.append(kMagic, sizeof kMagic).append(blob).append(reinterpret_cast<const char*>(&sum), sizeof sum);
+  try {
+    writeFileDurably(final, bytes);
+  } catch (const std::system_error& e) {
+    throw storageError(fmt::format("cannot store the result of task {}: {}", task, e.what()), e.code().value());
   }
-  fs::rename(tmp, final);
 }
 
 std::vector<uint32_t> ResultStore::stored(int64_t job) const {

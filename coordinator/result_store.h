@@ -1,9 +1,9 @@
 // Accepted task results, one file each: STATE/jobs/job-<id>/results/task-NNNNNN.part (the partial
 // result as proto/convert.h serializePartial writes it, zero runs left out, plus a checksum). A file is
-// written under a temporary name and renamed, so it exists whole or not at all, and it is written before
-// the upload is acknowledged, so a coordinator killed at any point loses nothing it accepted. No fsync
-// (as SQLite's synchronous=NORMAL did not sync each commit either): a power loss may lose or tear the
-// latest files; a torn file fails its checksum on reload and its task is rendered again.
+// written durably (common/core/durable_file.h: temporary name, fsync, rename, fsync of the directory)
+// before the upload is acknowledged, so neither a killed coordinator nor a power loss loses anything it
+// accepted. A file torn anyway (a disk that lies) fails its checksum on reload and its task is rendered
+// again.
 //
 // Why not the SQLite database any more: a task's film is megabytes, and the database wrote each one
 // twice (WAL, then checkpoint, with an fsync per checkpoint) and read it back for the merge; the

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "coordinator/storage_error.h"
+#include "coordinator/auth.h"
 #include "proto/farm_convert.h"
 #include "proto/sparse_film.h"
 #include "proto/mltfarm.grpc.pb.h"
@@ -25,25 +26,10 @@ using grpc::StatusCode;
 
 constexpr uint64_t kMaxBundleBytes = 4ull << 30;
 
-std::string readPem(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read TLS file", path));
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-// Checks the shared token; returns OK when no token is configured.
-Status checkToken(const ServerContext* ctx, const std::string& token) {
-  if (token.empty()) return Status::OK;
-  auto [begin, end] = ctx->client_metadata().equal_range("authorization");
-  for (auto it = begin; it != end; ++it)
-    if (std::string(it->second.data(), it->second.size()) == "Bearer " + token) return Status::OK;
-  return Status(StatusCode::UNAUTHENTICATED, "missing or wrong token (authorization: Bearer ...)");
-}
-
 // Runs `body` with auth and exception mapping.
 template <class F>
-Status guarded(ServerContext* ctx, const std::string& token, const char* rpc, F&& body) {
-  Status auth = checkToken(ctx, token);
+Status guarded(ServerContext* ctx, const TokenCheck& token, const char* rpc, F&& body) {
+  Status auth = token.check(*ctx);
   if (!auth.ok()) {
     spdlog::warn("rpc={} peer={} event=unauthenticated", rpc, ctx->peer());
     return auth;
@@ -72,7 +58,7 @@ void appendChunk(std::map<std::string, std::string>& files, uint64_t& total, con
 
 class CoordinatorServiceImpl final : public v1::Coordinator::Service {
  public:
-  CoordinatorServiceImpl(ClientHandler& h, std::string token) : h_(h), token_(std::move(token)) {}
+  CoordinatorServiceImpl(ClientHandler& h, const std::string& token) : h_(h), token_(token) {}
 
   Status SubmitJob(ServerContext* ctx, grpc::ServerReader<v1::SubmitJobRequest>* reader,
                    v1::SubmitJobResponse* resp) override {
@@ -164,13 +150,13 @@ class CoordinatorServiceImpl final : public v1::Coordinator::Service {
 
  private:
   ClientHandler& h_;
-  std::string token_;
+  TokenCheck token_;
 };
 
 class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
-  WorkerServiceImpl(WorkerHandler& h, std::string token, std::function<void(uint64_t, double)> onUpload)
-      : h_(h), token_(std::move(token)), onUpload_(std::move(onUpload)) {}
+  WorkerServiceImpl(WorkerHandler& h, const std::string& token, std::function<void(uint64_t, double)> onUpload)
+      : h_(h), token_(token), onUpload_(std::move(onUpload)) {}
 
   Status Register(ServerContext* ctx, const v1::RegisterRequest* req, v1::RegisterResponse* resp) override {
     return guarded(ctx, token_, "Register", [&] {
@@ -303,7 +289,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
 
  private:
   WorkerHandler& h_;
-  std::string token_;
+  TokenCheck token_;
   std::function<void(uint64_t, double)> onUpload_;
 };
 
@@ -344,16 +330,8 @@ RunningServer startServer(const ServerOptions& options, ClientHandler& clients, 
   RunningServer rs;
   rs.clientService = std::make_unique<CoordinatorServiceImpl>(clients, options.token);
   rs.workerService = std::make_unique<WorkerServiceImpl>(workers, options.token, options.onUpload);
-  std::shared_ptr<grpc::ServerCredentials> creds;
-  if (!options.tlsCert.empty() || !options.tlsKey.empty()) {
-    if (options.tlsCert.empty() || options.tlsKey.empty())
-      throw std::runtime_error("--tls-cert and --tls-key must be given together");
-    grpc::SslServerCredentialsOptions ssl;
-    ssl.pem_key_cert_pairs.push_back({readPem(options.tlsKey), readPem(options.tlsCert)});
-    creds = grpc::SslServerCredentials(ssl);
-  } else {
-    creds = grpc::InsecureServerCredentials();
-  }
+  checkListenPolicy(options);
+  std::shared_ptr<grpc::ServerCredentials> creds = serverCredentials(options);
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options.listen, creds, &rs.port);
   builder.RegisterService(rs.clientService.get());

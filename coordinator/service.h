@@ -20,6 +20,8 @@ struct ServerOptions {
   // Told of every UploadResult that reached the handler: film bytes received, seconds from its first
   // message to the reply (metrics). Optional.
   std::function<void(uint64_t bytes, double seconds)> onUpload;
+  std::string tlsClientCa;                 // PEM CA: client certificates are required and checked (mutual TLS)
+  bool insecure = false;                   // allow a non-loopback address with neither token nor client CA
 };
 
 struct RunningServer {

@@ -11,6 +11,7 @@
 
 #include "coordinator/coordinator.h"
 #include "coordinator/result_check.h"
+#include "coordinator/crash_point.h"
 
 namespace fs = std::filesystem;
 
@@ -102,6 +103,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
                  leaseId, e.what());
     throw;
   }
+  crashPoint("upload-received");
   // Persist before acknowledging: nothing accepted is lost.
   results_->put(id, taskIndex, result);
   if (opt_.keepPartials) {
@@ -133,6 +135,7 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   } else {
     touch(job);
   }
+  crashPoint("upload-recorded");
   return {true, "accepted"};
 }
 

@@ -12,7 +12,7 @@ PACKAGES=(
   prometheus-cpp-dev libcpp-httplib-dev
   chromium
   python3 python3-matplotlib python3-numpy
-  iproute2 procps
+  iproute2 procps openssl
 )
 
 missing=()

@@ -2,6 +2,9 @@
 #include "proto/channel.h"
 
 #include <fmt/format.h>
+
+#include <cctype>
+#include <cstdlib>
 #include <fstream>
 
 namespace mlt::farm {
@@ -14,6 +17,34 @@ std::string readAll(const std::string& path) {
 }
 
 }  // namespace
+
+std::string loadToken(const std::string& tokenFile) {
+  std::string token, where;
+  if (!tokenFile.empty()) {
+    token = readAll(tokenFile);
+    where = tokenFile;
+  } else if (const char* t = std::getenv("MLTFARM_TOKEN")) {
+    token = t;
+    where = "MLTFARM_TOKEN";
+  } else {
+    return {};
+  }
+  while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
+  if (token.empty()) throw std::runtime_error(fmt::format("{}: the token is empty", where));
+  if (token.size() > 4096) throw std::runtime_error(fmt::format("{}: the token is longer than 4096 bytes", where));
+  for (size_t i = 0; i < token.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(token[i]);
+    if (c <= ' ' || c >= 0x7f)  // it travels in an HTTP/2 header: printable ASCII only
+      throw std::runtime_error(
+          fmt::format("{}: byte {} of the token is whitespace or not printable ASCII", where, i + 1));
+  }
+  return token;
+}
+
+std::string tokenOnCommandLineError() {
+  return "--token: a token on the command line is visible to every user of the machine (ps, /proc); "
+         "put it in a file readable only by you and pass --token-file FILE, or set MLTFARM_TOKEN";
+}
 
 const char* statusCodeName(grpc::StatusCode c) {
   switch (c) {
@@ -43,14 +74,24 @@ RpcError::RpcError(grpc::StatusCode code, const std::string& rpc, const std::str
 
 std::shared_ptr<grpc::Channel> makeChannel(const ChannelOptions& o) {
   std::shared_ptr<grpc::ChannelCredentials> creds;
+  if (o.tlsCert.empty() != o.tlsKey.empty())
+    throw std::runtime_error("--tls-cert and --tls-key (the client certificate) must be given together");
+  if (!o.tlsCert.empty() && o.tlsCa.empty())
+    throw std::runtime_error("--tls-cert: a client certificate needs --tls-ca (the coordinator's root certificate)");
+  grpc::ChannelArguments args;
   if (!o.tlsCa.empty()) {
     grpc::SslCredentialsOptions ssl;
     ssl.pem_root_certs = readAll(o.tlsCa);
+    if (!o.tlsCert.empty()) {
+      ssl.pem_cert_chain = readAll(o.tlsCert);
+      ssl.pem_private_key = readAll(o.tlsKey);
+    }
     creds = grpc::SslCredentials(ssl);
+    if (!o.tlsServerName.empty()) args.SetSslTargetNameOverride(o.tlsServerName);
   } else {
+    if (!o.tlsServerName.empty()) throw std::runtime_error("--tls-server-name needs --tls-ca");
     creds = grpc::InsecureChannelCredentials();
   }
-  grpc::ChannelArguments args;
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 100);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
   return grpc::CreateCustomChannel(o.address, creds, args);

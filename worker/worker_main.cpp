@@ -1,7 +1,7 @@
 // mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
-//   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token T] [--tls-ca CA.pem] [--cache-dir DIR]
-//                  [--spool-dir DIR] [--spool-max-mb MB]
-//                  [--metrics-listen HOST:PORT]
+//   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token-file F] [--tls-ca CA.pem [--tls-cert C --tls-key K]]
+//                  [--cache-dir DIR] [--spool-dir DIR] [--spool-max-mb MB] [--metrics-listen HOST:PORT]
+// The token comes from --token-file or $MLTFARM_TOKEN, never from argv.
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -26,9 +26,14 @@ int main(int argc, char** argv) {
   std::string logLevel = "info";
   app.add_option("--coordinator", opt.coordinator.address, "coordinator address HOST:PORT")->required();
   app.add_option("--threads", opt.threads, "tasks run in parallel (default: all cores)")->check(CLI::Range(0, 4096));
-  app.add_option("--token", opt.coordinator.token, "shared token (or MLTFARM_TOKEN)");
-  if (const char* t = std::getenv("MLTFARM_TOKEN"); t && opt.coordinator.token.empty()) opt.coordinator.token = t;
+  std::string tokenFile, argvToken;
+  app.add_option("--token-file", tokenFile, "file holding the shared token (default: $MLTFARM_TOKEN, else none)");
+  app.add_option("--token", argvToken, "removed: use --token-file or MLTFARM_TOKEN")->group("");  // hidden
   app.add_option("--tls-ca", opt.coordinator.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
+  app.add_option("--tls-cert", opt.coordinator.tlsCert, "PEM client certificate chain (mutual TLS)");
+  app.add_option("--tls-key", opt.coordinator.tlsKey, "PEM private key of the client certificate");
+  app.add_option("--tls-server-name", opt.coordinator.tlsServerName,
+                 "name the coordinator's certificate carries, when not the host of --coordinator");
   app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
   app.add_option("--spool-dir", opt.spoolDir,
                  "finished films wait here while the coordinator is away (default: CACHE_DIR/spool)");
@@ -50,6 +55,8 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");
   try {
+    if (!argvToken.empty()) throw std::runtime_error(mlt::farm::tokenOnCommandLineError());
+    opt.coordinator.token = mlt::farm::loadToken(tokenFile);
     mlt::farm::Worker worker(opt);
     mlt::farm::MetricsEndpoint metrics;
     if (!metricsListen.empty()) {

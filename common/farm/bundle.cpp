@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/core/durable_file.h"
 #include "common/core/sha256.h"
 #include "common/scene/scene_loader.h"
 
@@ -32,6 +33,9 @@ void validateBundlePath(const std::string& path) {
   if (path.empty()) bad("empty");
   if (path.front() == '/') bad("absolute paths are not allowed");
   if (path.find('\\') != std::string::npos) bad("backslashes are not allowed");
+  // A NUL ends the name the file system sees (the file written would not be the file hashed).
+  if (std::any_of(path.begin(), path.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+    bad("control characters (NUL, newline, ...) are not allowed");
   size_t start = 0;
   while (start <= path.size()) {
     size_t end = path.find('/', start);
@@ -91,10 +95,16 @@ void writeBundle(const std::string& dir, const std::vector<BundleFile>& files) {
     validateBundlePath(f.path);
     fs::path p = fs::path(dir) / f.path;
     fs::create_directories(p.parent_path());
-    std::ofstream out(p, std::ios::binary | std::ios::trunc);
-    out.write(f.data.data(), std::streamsize(f.data.size()));
-    if (!out) throw FarmError(FarmError::Code::Internal, fmt::format("{}: cannot write", p.string()));
+    try {
+      writeFileDurably(p.string(), f.data);
+    } catch (const std::exception& e) {
+      throw FarmError(FarmError::Code::Internal, e.what());
+    }
   }
+  // The subdirectories' entries too: after a crash the bundle is whole once its directory is renamed in.
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_directory()) syncDirectory(e.path().string());
+  syncDirectory(dir);
 }
 
 std::vector<BundleFile> readBundle(const std::string& dir) {

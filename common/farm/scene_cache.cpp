@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fmt/format.h>
 
+#include "common/core/durable_file.h"
 #include "common/farm/bundle.h"
 #include "common/farm/scene_loading.h"
 
@@ -41,6 +42,7 @@ std::shared_ptr<const RenderScene> SceneCache::get(const std::string& sceneHash,
     std::error_code ec;
     fs::rename(tmp, dir, ec);  // another worker on this machine may have won: same bytes
     if (ec) fs::remove_all(tmp);
+    else syncDirectory(dir.parent_path().string());
     spdlog::info("event=scene_cached scene_hash={} files={}", sceneHash.substr(0, 12), files.size());
   }
   SceneDesc desc = loadSceneDesc((dir / sceneFile).string(), defines);

@@ -188,13 +188,15 @@ def main():
         return 77
 
     work = tempfile.mkdtemp(prefix="mltfarm-browser-")
+    # The token reaches every program through the environment (argv is refused: others can read it).
+    os.environ["MLTFARM_TOKEN"] = TOKEN
     procs = []
     dt = None
     ok = False
     try:
         coord = subprocess.Popen(
             [os.path.join(tools, "mltfarm-coordinator"), "--listen", "127.0.0.1:0", "--state-dir",
-             os.path.join(work, "state"), "--token", TOKEN, "--http-listen", "127.0.0.1:0", "--heartbeat", "0.2",
+             os.path.join(work, "state"), "--http-listen", "127.0.0.1:0", "--heartbeat", "0.2",
              "--lease-timeout", "60"],
             stdout=subprocess.PIPE, stderr=open(os.path.join(work, "coordinator.log"), "w"))
         procs.append(coord)
@@ -205,7 +207,7 @@ def main():
         def start_workers():
             for i in range(2):
                 workers.append(subprocess.Popen(
-                    [os.path.join(tools, "mltfarm-worker"), "--coordinator", address, "--token", TOKEN, "--threads", "1",
+                    [os.path.join(tools, "mltfarm-worker"), "--coordinator", address, "--threads", "1",
                      "--cache-dir", os.path.join(work, "cache"), "--debug-task-delay-ms", "300"],
                     stdout=subprocess.DEVNULL, stderr=open(os.path.join(work, "worker-%d.log" % i), "w")))
                 procs.append(workers[-1])
@@ -217,7 +219,7 @@ def main():
         def submit(name, priority):
             out = subprocess.run(
                 [os.path.join(tools, "mltfarm"), "submit", os.path.join(source, "scenes", "cornell-box.xml"),
-                 "--coordinator", address, "--token", TOKEN, "-m", "pssmlt", "--width", "160", "--height", "120",
+                 "--coordinator", address, "-m", "pssmlt", "--width", "160", "--height", "120",
                  "--mutations-per-pixel", "24", "--chains", "24", "--bootstrap", "20000", "--max-depth", "6",
                  "--seed", "7", "--name", name, "--priority", str(priority)],
                 check=True, capture_output=True, text=True)

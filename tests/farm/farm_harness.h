@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/farm/scene_loading.h"
+#include "common/core/durable_file.h"
 #include "coordinator/client.h"
 #include "coordinator/process.h"
 
@@ -62,7 +63,7 @@ struct Farm {
 
   void startCoordinator(std::vector<std::string> extra = {}, const std::string& listen = "") {
     std::vector<std::string> args{"--state-dir", stateDir, "--heartbeat", "0.2", "--lease-timeout", "1.5"};
-    if (!token.empty()) args.insert(args.end(), {"--token", token});
+    if (!token.empty()) args.insert(args.end(), {"--token-file", tokenFile()});
     args.insert(args.end(), extra.begin(), extra.end());
     const std::string log = dir / ("coordinator-" + std::to_string(restarts++) + ".log");
     if (listen.empty()) {
@@ -81,10 +82,16 @@ struct Farm {
   ChildProcess& startWorker(int threads = 1, std::vector<std::string> extra = {}) {
     std::vector<std::string> argv{toolsDir() + "/mltfarm-worker", "--coordinator", coordinator->address, "--threads",
                                   std::to_string(threads), "--cache-dir", dir / "cache"};
-    if (!token.empty()) argv.insert(argv.end(), {"--token", token});
+    if (!token.empty()) argv.insert(argv.end(), {"--token-file", tokenFile()});
     argv.insert(argv.end(), extra.begin(), extra.end());
     workers.push_back(std::make_unique<ChildProcess>(argv, dir / ("worker-" + std::to_string(workers.size()) + ".log"), false));
     return *workers.back();
+  }
+  // The token as the processes read it (never on argv).
+  std::string tokenFile() const {
+    const std::string path = dir / "token";
+    writeFileDurably(path, token, 0600);
+    return path;
   }
   FarmClient client(const std::string& tok = "\x01") const {
     return FarmClient({coordinator->address, tok == "\x01" ? token : tok, ""});

@@ -3,7 +3,8 @@
 //   mltfarm status JOB --coordinator ADDR       mltfarm jobs --coordinator ADDR
 //   mltfarm watch JOB --coordinator ADDR        mltfarm cancel JOB --coordinator ADDR
 //   mltfarm fetch JOB -o OUT.exr [--png OUT.png] --coordinator ADDR
-// --coordinator defaults to $MLTFARM_COORDINATOR, else 127.0.0.1:50051; --token to $MLTFARM_TOKEN.
+// --coordinator defaults to $MLTFARM_COORDINATOR, else 127.0.0.1:50051; the token comes from --token-file,
+// else $MLTFARM_TOKEN (never from argv).
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -24,13 +25,24 @@ using farm::JobStatus;
 
 struct Connection {
   farm::ChannelOptions channel;
+  std::string tokenFile, argvToken;
   void add(CLI::App& sub) {
     if (const char* a = std::getenv("MLTFARM_COORDINATOR")) channel.address = a;
     else channel.address = "127.0.0.1:50051";
-    if (const char* t = std::getenv("MLTFARM_TOKEN")) channel.token = t;
     sub.add_option("--coordinator", channel.address, "Coordinator address HOST:PORT")->capture_default_str();
-    sub.add_option("--token", channel.token, "Shared token (default: $MLTFARM_TOKEN)");
+    sub.add_option("--token-file", tokenFile, "File holding the shared token (default: $MLTFARM_TOKEN)");
+    sub.add_option("--token", argvToken, "Removed: use --token-file or MLTFARM_TOKEN")->group("");  // hidden
     sub.add_option("--tls-ca", channel.tlsCa, "PEM root certificate of the coordinator (enables TLS)");
+    sub.add_option("--tls-cert", channel.tlsCert, "PEM client certificate chain (mutual TLS)");
+    sub.add_option("--tls-key", channel.tlsKey, "PEM private key of the client certificate");
+    sub.add_option("--tls-server-name", channel.tlsServerName,
+                   "Name the coordinator's certificate carries, when not the host of --coordinator");
+  }
+  // The channel with its token: call when the command runs (after parsing).
+  const farm::ChannelOptions& resolved() {
+    if (!argvToken.empty()) throw std::runtime_error(farm::tokenOnCommandLineError());
+    channel.token = farm::loadToken(tokenFile);
+    return channel;
   }
 };
 
@@ -77,7 +89,7 @@ CommandRun setupSubmit(CLI::App& sub) {
   sub.add_option("--png", o->png, "With --watch: fetch the PNG here when done");
   return [o, settings]() -> int {
     const wire::SubmittedSettings s = submittedSettings(settings->settings());
-    FarmClient client(o->conn.channel);
+    FarmClient client(o->conn.resolved());
     JobStatus st = client.submit(o->scene, s, o->priority, o->name, o->path);
     std::printf("%s\n", st.jobId.c_str());
     std::fflush(stdout);
@@ -105,7 +117,7 @@ CommandSetup jobCommand(int (*body)(FarmClient&, const JobOptions&), bool needsO
       sub.add_option("--png", o->png, "Also fetch the PNG preview here");
     }
     return [o, body] {
-      FarmClient client(o->conn.channel);
+      FarmClient client(o->conn.resolved());
       return body(client, *o);
     };
   };
@@ -136,7 +148,7 @@ const CommandRegistration kJobs("jobs", "List a coordinator's jobs", [](CLI::App
   auto conn = std::make_shared<Connection>();
   conn->add(sub);
   return [conn] {
-    FarmClient client(conn->channel);
+    FarmClient client(conn->resolved());
     for (const JobStatus& s : client.list()) printStatus(s);
     return 0;
   };

@@ -1,0 +1,89 @@
+// Crash-safe file replacement (see durable_file.h).
+#include "common/core/durable_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <stdexcept>
+
+namespace mlt {
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const char* what, int err) {
+  throw std::runtime_error(fmt::format("{}: cannot {}: {}", path, what, std::strerror(err)));
+}
+
+std::string parentOf(const std::string& path) {
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  return dir.empty() ? "." : dir;
+}
+
+void syncFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(path, "open for fsync", errno);
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    fail(path, "fsync", err);
+  }
+  ::close(fd);
+}
+
+}  // namespace
+
+void syncDirectory(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) fail(dir, "open the directory for fsync", errno);
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    fail(dir, "fsync the directory", err);
+  }
+  ::close(fd);
+}
+
+void writeFileDurably(const std::string& path, std::string_view data, mode_t mode) {
+  // A name of its own per writer: two threads or processes may write the same path at once.
+  static std::atomic<unsigned> serial{0};
+  const std::string tmp = fmt::format("{}.tmp-{}-{}", path, ::getpid(), serial++);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+  if (fd < 0) fail(tmp, "create", errno);
+  auto abandon = [&](const char* what, int err) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    fail(tmp, what, err);
+  };
+  if (::fchmod(fd, mode) != 0) abandon("set the permissions of", errno);  // the umask does not apply
+  for (size_t done = 0; done < data.size();) {
+    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) abandon("write", n < 0 ? errno : EIO);
+    done += size_t(n);
+  }
+  if (::fsync(fd) != 0) abandon("fsync", errno);
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail(tmp, "close", err);
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail(path, "rename the temporary file onto", err);
+  }
+  syncDirectory(parentOf(path));
+}
+
+void commitFileDurably(const std::string& tmpPath, const std::string& path) {
+  syncFile(tmpPath);
+  if (::rename(tmpPath.c_str(), path.c_str()) != 0) fail(path, "rename the temporary file onto", errno);
+  syncDirectory(parentOf(path));
+}
+
+}  // namespace mlt
