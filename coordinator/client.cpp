@@ -114,16 +114,34 @@ JobStatus FarmClient::cancel(const std::string& jobId) {
 }
 
 std::vector<JobStatus> FarmClient::list() {
+  std::vector<JobStatus> out;
+  std::string token;
+  do {  // page by page (each reply stays under the message limit)
+    grpc::ClientContext ctx;
+    prepareContext(ctx, opt_, kShortDeadline);
+    v1::ListJobsRequest req;
+    req.set_format_version(wire::kFormatVersion);
+    req.set_page_token(token);
+    v1::ListJobsResponse resp;
+    grpc::Status s = stub_->ListJobs(&ctx, req, &resp);
+    if (!s.ok()) fail(s, "ListJobs");
+    for (const auto& j : resp.jobs()) out.push_back(fromProto(j));
+    if (!resp.next_page_token().empty() && resp.next_page_token() == token)
+      throw RpcError(grpc::StatusCode::INTERNAL, "ListJobs", "the page token did not advance");
+    token = resp.next_page_token();
+  } while (!token.empty());
+  return out;
+}
+
+void FarmClient::remove(const std::string& jobId) {
   grpc::ClientContext ctx;
   prepareContext(ctx, opt_, kShortDeadline);
-  v1::ListJobsRequest req;
-  req.set_format_version(wire::kFormatVersion);
-  v1::ListJobsResponse resp;
-  grpc::Status s = stub_->ListJobs(&ctx, req, &resp);
-  if (!s.ok()) fail(s, "ListJobs");
-  std::vector<JobStatus> out;
-  for (const auto& j : resp.jobs()) out.push_back(fromProto(j));
-  return out;
+  v1::JobRef ref;
+  ref.set_format_version(wire::kFormatVersion);
+  ref.set_job_id(jobId);
+  v1::DeleteJobResponse resp;
+  grpc::Status s = stub_->DeleteJob(&ctx, ref, &resp);
+  if (!s.ok()) fail(s, "DeleteJob");
 }
 
 JobStatus FarmClient::watch(const std::string& jobId, const std::function<void(const JobStatus&)>& onStatus,

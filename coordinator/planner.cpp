@@ -39,7 +39,7 @@ void Coordinator::plannerLoop() {
 }
 
 void Coordinator::planOne(int64_t id) {
-  std::string file, jobId;
+  std::string file, dir, jobId;
   RenderSettings settings;
   std::map<std::string, std::string> defines;
   {
@@ -47,7 +47,8 @@ void Coordinator::planOne(int64_t id) {
     Job& job = jobs_.at(id);
     if (job.status.state != JobState::Queued) return;
     setState(job, JobState::Planning);
-    file = (fs::path(sceneDir(job.rec.sceneHash)) / job.rec.sceneFile).string();
+    dir = sceneDir(job.rec.sceneHash);
+    file = (fs::path(dir) / job.rec.sceneFile).string();
     v1::RenderSettings ps;
     ps.ParseFromString(job.rec.settings);
     settings = wire::fromProto(ps).settings;
@@ -57,7 +58,7 @@ void Coordinator::planOne(int64_t id) {
   std::shared_ptr<JobPlan> plan;
   std::string error;
   try {
-    auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
+    auto scene = buildRenderScene(loadSceneDesc(file, defines, dir), settings.width, settings.height);  // the bundle only
     spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
                  settings.bootstrapSamples);
     plan = std::make_shared<JobPlan>(planJob(*scene, settings));

@@ -16,7 +16,7 @@ namespace mlt::farm {
 class FarmError : public std::runtime_error {
  public:
   enum class Code { InvalidArgument, NotFound, FailedPrecondition, AlreadyExists, Unauthenticated, Internal,
-                    Unavailable };
+                    Unavailable, ResourceExhausted };
   FarmError(Code code, const std::string& what) : std::runtime_error(what), code_(code) {}
   Code code() const { return code_; }
  private:
@@ -60,6 +60,7 @@ struct SubmitRequest {
   std::string bundleSceneFile;
   std::string coordinatorPath;
   std::string bundleHash;  // the client's hash of the bundle; checked if set
+  std::string client;      // who submits (the transport's peer host): jobs-per-client quota
 };
 
 // A lease: a fixed, contiguous range of work units [unitBegin, unitEnd) of one job (a "task").
