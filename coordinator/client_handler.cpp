@@ -40,11 +40,7 @@ SceneBundle bundleFromSceneRoot(const std::string& sceneRoot, const std::string&
   if (!pathInsideRoot(sceneRoot, p.string()))
     throw FarmError(Code::InvalidArgument,
                     fmt::format("coordinator_path: '{}' lies outside the coordinator's scene root", clipForMessage(path)));
-  try {
-    return collectBundle(p.string(), defines, sceneRoot);
-  } catch (const FarmError& e) {
-    throw FarmError(e.code(), hideRoot(e.what(), sceneRoot));
-  }
+  return collectBundle(p.string(), defines, sceneRoot);  // the scene root is the clients' to name
 }
 
 void checkBundleQuota(const std::vector<BundleFile>& files, const SubmitQuotas& quota) {

@@ -141,6 +141,9 @@ PartialExr readPartialExr(const std::string& path) {
       throw std::runtime_error(fmt::format("{}: splat layer {} beyond the largest a job has ({})", path,
                                            h.splatLayers.back(), wire::kMaxSplatLayer));
   });
+  if (!f.sumsVerified)
+    throw std::runtime_error(fmt::format("{}: no checksum of the raw sums (mltfarm.sumsSha256): not written by the "
+                                         "farm, or rewritten by another tool", path));
   try {
     p.result = wire::partialFromHeaderBytes(headerBytes, std::move(f.film));
   } catch (const std::invalid_argument& e) {

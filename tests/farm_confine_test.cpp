@@ -185,7 +185,7 @@ TEST(SceneConfinement, SubmittingByPathNeedsASceneRootAndStaysInIt) {
   r.coordinatorPath = "../outside.xml";
   on.refuses(r, FarmError::Code::InvalidArgument, {"coordinator_path", "outside"});
   r.coordinatorPath = "escape.xml";
-  on.refuses(r, FarmError::Code::InvalidArgument, {"escape.xml:5:", "outside"});
+  on.refuses(r, FarmError::Code::InvalidArgument, {"root/escape.xml:5:", "outside"});
 }
 
 TEST(SceneConfinement, WorkersReadOnlyTheFetchedBundleAndCheckItsHash) {

@@ -168,8 +168,15 @@ TEST_F(MergeGuard, SumsPassedThroughFloatAreRefused) {
   writeBytes(rewritten, bytes);
   std::vector<std::string> parts = parts_;
   parts[0] = rewritten;
-  const std::string e = errorOf([&] { mergePartialExrs(parts, dir_ / "o.exr", ""); });
+  std::string e = errorOf([&] { mergePartialExrs(parts, dir_ / "o.exr", ""); });
   EXPECT_NE(e.find("do not match their checksum"), std::string::npos) << e;
+  // A tool that dropped the attribute (here: renamed it) leaves a partial without a checksum: refused too.
+  const size_t name = bytes.find("mltfarm.sumsSha256");
+  ASSERT_NE(name, std::string::npos);
+  bytes.replace(name, 18, "mltfarm.sumsSHA256");
+  writeBytes(rewritten, bytes);
+  e = errorOf([&] { mergePartialExrs(parts, dir_ / "o.exr", ""); });
+  EXPECT_NE(e.find("no checksum of the raw sums"), std::string::npos) << e;
 }
 
 TEST_F(MergeGuard, TheOutputMayNotBeAnInput) {

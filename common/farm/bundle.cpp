@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "common/core/sha256.h"
-#include "common/farm/scene_loading.h"
+#include "common/scene/scene_loader.h"
 #include "common/core/clip.h"
 #include "common/scene/scene_files.h"
 
@@ -48,7 +48,12 @@ SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::stri
                           const std::string& rootDir) {
   const fs::path scenePath = fs::absolute(sceneFile).lexically_normal();
   const std::string root = rootDir.empty() ? scenePath.parent_path().string() : rootDir;
-  const SceneDesc desc = loadSceneDesc(scenePath.string(), defines, root);
+  SceneDesc desc;
+  try {
+    desc = loadScene(scenePath.string(), defines, root);  // the client's own paths: named in full
+  } catch (const std::exception& e) {
+    throw FarmError(FarmError::Code::InvalidArgument, e.what());
+  }
   std::vector<std::string> paths{scenePath.string()};
   paths.insert(paths.end(), desc.referencedFiles.begin(), desc.referencedFiles.end());
   SceneBundle bundle;

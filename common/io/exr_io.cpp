@@ -329,10 +329,9 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
       fail(path, "size mismatch: data window differs from display window");
 
     const auto* checksum = header.findTypedAttribute<Imf::StringAttribute>(kSumsChecksumAttr);
-    if (!checksum) fail(path, std::string("no checksum of the raw sums (") + kSumsChecksumAttr + "): not written by mltfarm, or rewritten");
-    const auto* nf = header.findTypedAttribute<Imf::DoubleAttribute>(kNonFiniteAttr);
-    if (!nf || !(nf->value() >= 0 && nf->value() <= 9007199254740992.0) || nf->value() != std::floor(nf->value()))
-      fail(path, std::string("missing or invalid ") + kNonFiniteAttr);
+    const auto* nfAttr = header.findTypedAttribute<Imf::DoubleAttribute>(kNonFiniteAttr);
+    const double nf = nfAttr ? nfAttr->value() : 0.0;
+    if (!(nf >= 0 && nf <= 9007199254740992.0) || nf != std::floor(nf)) fail(path, std::string("invalid ") + kNonFiniteAttr);
     const std::vector<uint32_t> layers = layersInHeader(path, header);
     if (check) check({s.width, s.height, layers, readMetadata(header, false)});  // before any allocation
 
@@ -353,10 +352,10 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
     }
     file.setFrameBuffer(fb);
     file.readPixels(s.dw.min.y, s.dw.max.y);
-    if (sumsChecksum(s.width, s.height, uint64_t(nf->value()), fields, words) != checksum->value())
+    if (checksum && sumsChecksum(s.width, s.height, uint64_t(nf), fields, words) != checksum->value())
       fail(path, "the raw sums do not match their checksum (the file was rewritten, e.g. through float, or is corrupt)");
 
-    FilmExr out{Film(s.width, s.height), readMetadata(header, false)};
+    FilmExr out{Film(s.width, s.height), readMetadata(header, false), checksum != nullptr};
     for (size_t f = 0; f < fields.size(); ++f) {
       double* data = fieldData(out.film, fields[f]);
       for (size_t i = 0; i < n; ++i) {
@@ -364,7 +363,7 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
         data[i * fields[f].stride + fields[f].offset] = std::bit_cast<double>(bits);
       }
     }
-    out.film.setNonFiniteSamples(uint64_t(nf->value()));
+    out.film.setNonFiniteSamples(uint64_t(nf));
     return out;
   } catch (const std::runtime_error& e) {
     if (std::string(e.what()).rfind(path + ":", 0) == 0) throw;

@@ -9,8 +9,8 @@
 //    plus FLOAT R, G, B: a developed preview supplied by the caller, so any EXR viewer shows
 //    something sensible. The header carries the caller's metadata plus `mltfarm.format` ("partial-film")
 //    and `mltfarm.formatVersion`, the film's non-finite sample count, and `mltfarm.sumsSha256`: a SHA-256
-//    over the size, the non-finite count and every channel's words, checked on reading (a file whose
-//    sums went through float, or were edited, is refused).
+//    over the size, the non-finite count and every channel's words, checked on reading when present (a
+//    file whose sums went through float, or were edited, is refused; FilmExr::sumsVerified tells).
 // The keys mltfarm.format, mltfarm.formatVersion, mltfarm.nonFiniteSamples, mltfarm.sumsSha256 and OpenEXR's own
 // attribute names (channels, compression, ...) are reserved: using them in metadata is an error.
 // Metadata: strings become StringAttributes, numbers DoubleAttributes (OpenEXR has no 64-bit integer
@@ -48,7 +48,8 @@ ExrImage readExr(const std::string& path);
 
 struct FilmExr {
   Film film;
-  ImageMetadata metadata;  // without the three bookkeeping attributes above
+  ImageMetadata metadata;  // without the bookkeeping attributes above
+  bool sumsVerified = false;  // the file carried mltfarm.sumsSha256 and the sums matched it
 };
 
 // previewSplatScale: the scale passed to Film::develop for the FLOAT preview channels only; the raw
