@@ -88,42 +88,58 @@ JobStatus FarmClient::submitBundle(const std::vector<BundleFile>& files, const s
 }
 
 namespace {
-// A unary call that takes a job id and answers a job status (GetJob, CancelJob).
-template <typename Call>
-JobStatus jobCall(const ChannelOptions& opt, const std::string& jobId, const char* rpc, Call call) {
+// A unary call that takes a job id (GetJob, CancelJob: a job status; DeleteJob).
+template <typename Response = v1::JobStatus, typename Call>
+Response jobCall(const ChannelOptions& opt, const std::string& jobId, const char* rpc, Call call) {
   grpc::ClientContext ctx;
   prepareContext(ctx, opt, kShortDeadline);
   v1::JobRef ref;
   ref.set_format_version(wire::kFormatVersion);
   ref.set_job_id(jobId);
-  v1::JobStatus resp;
+  Response resp;
   grpc::Status s = call(&ctx, ref, &resp);
   if (!s.ok()) fail(s, rpc);
-  return fromProto(resp);
+  return resp;
 }
 }  // namespace
 
 JobStatus FarmClient::get(const std::string& jobId) {
-  return jobCall(opt_, jobId, "GetJob",
-                 [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) { return stub_->GetJob(c, r, o); });
+  return fromProto(jobCall(opt_, jobId, "GetJob", [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) {
+    return stub_->GetJob(c, r, o);
+  }));
 }
 
 JobStatus FarmClient::cancel(const std::string& jobId) {
-  return jobCall(opt_, jobId, "CancelJob",
-                 [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) { return stub_->CancelJob(c, r, o); });
+  return fromProto(jobCall(opt_, jobId, "CancelJob", [&](grpc::ClientContext* c, const v1::JobRef& r, v1::JobStatus* o) {
+    return stub_->CancelJob(c, r, o);
+  }));
 }
 
 std::vector<JobStatus> FarmClient::list() {
-  grpc::ClientContext ctx;
-  prepareContext(ctx, opt_, kShortDeadline);
-  v1::ListJobsRequest req;
-  req.set_format_version(wire::kFormatVersion);
-  v1::ListJobsResponse resp;
-  grpc::Status s = stub_->ListJobs(&ctx, req, &resp);
-  if (!s.ok()) fail(s, "ListJobs");
   std::vector<JobStatus> out;
-  for (const auto& j : resp.jobs()) out.push_back(fromProto(j));
+  std::string token;
+  do {  // page by page (each reply stays under the message limit)
+    grpc::ClientContext ctx;
+    prepareContext(ctx, opt_, kShortDeadline);
+    v1::ListJobsRequest req;
+    req.set_format_version(wire::kFormatVersion);
+    req.set_page_token(token);
+    v1::ListJobsResponse resp;
+    grpc::Status s = stub_->ListJobs(&ctx, req, &resp);
+    if (!s.ok()) fail(s, "ListJobs");
+    for (const auto& j : resp.jobs()) out.push_back(fromProto(j));
+    if (!resp.next_page_token().empty() && resp.next_page_token() == token)
+      throw RpcError(grpc::StatusCode::INTERNAL, "ListJobs", "the page token did not advance");
+    token = resp.next_page_token();
+  } while (!token.empty());
   return out;
+}
+
+void FarmClient::remove(const std::string& jobId) {
+  jobCall<v1::DeleteJobResponse>(opt_, jobId, "DeleteJob",
+                                 [&](grpc::ClientContext* c, const v1::JobRef& r, v1::DeleteJobResponse* o) {
+                                   return stub_->DeleteJob(c, r, o);
+                                 });
 }
 
 JobStatus FarmClient::watch(const std::string& jobId, const std::function<void(const JobStatus&)>& onStatus,

@@ -33,7 +33,9 @@ class FarmClient {
                          const wire::SubmittedSettings& settings, int priority = 0, const std::string& name = "");
   JobStatus get(const std::string& jobId);
   JobStatus cancel(const std::string& jobId);
-  std::vector<JobStatus> list();
+  std::vector<JobStatus> list();  // every job, fetched page by page
+  // DeleteJob: removes a finished, failed or cancelled job and its files.
+  void remove(const std::string& jobId);
   // Streams progress to `onStatus` until the job is terminal; returns the final status.
   JobStatus watch(const std::string& jobId, const std::function<void(const JobStatus&)>& onStatus,
                   std::chrono::seconds deadline = std::chrono::hours(24 * 7));

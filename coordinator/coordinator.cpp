@@ -13,6 +13,8 @@
 #include <optional>
 #include <random>
 
+#include "common/core/clip.h"
+
 namespace fs = std::filesystem;
 
 namespace mlt::farm {
@@ -41,7 +43,7 @@ int64_t parseJobId(const std::string& jobId) {
   if (jobId.rfind("job-", 0) == 0 && jobId.size() > 4 && jobId.size() < 20 &&
       std::all_of(jobId.begin() + 4, jobId.end(), [](char c) { return c >= '0' && c <= '9'; }))
     return std::stoll(jobId.substr(4));
-  throw FarmError(Code::NotFound, fmt::format("job_id: unknown job '{}'", jobId));
+  throw FarmError(Code::NotFound, fmt::format("job_id: unknown job '{}'", clipForMessage(jobId, 32)));
 }
 
 Coordinator::Coordinator(CoordinatorOptions options) : opt_(std::move(options)) {
@@ -83,7 +85,7 @@ std::string Coordinator::jobDir(int64_t id) const {
 
 Coordinator::Job& Coordinator::findJob(const std::string& jobId) {
   auto it = jobs_.find(parseJobId(jobId));
-  if (it == jobs_.end()) throw FarmError(Code::NotFound, fmt::format("job_id: unknown job '{}'", jobId));
+  if (it == jobs_.end() || it->second.deleted) throw FarmError(Code::NotFound, fmt::format("job_id: unknown job '{}'", jobId));
   return it->second;
 }
 

@@ -39,6 +39,8 @@ struct CoordinatorOptions {
   bool keepPartials = false;          // also write STATE/jobs/<id>/partials/task-NNNN.exr
   int maxAttempts = 3;
   double leaseWaitSeconds = 1.0;
+  std::string sceneRoot;              // non-empty: SubmitJob may name a scene file under this directory
+  SubmitQuotas quotas;
   double previewEverySeconds = 0;     // > 0: write STATE/jobs/<id>/preview.{exr,png} this often while running      // LeaseWork long-polls this long when there is nothing to lease                // a task that failed (report or lease expiry) this often fails its job
 };
 
@@ -55,6 +57,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   JobStatus cancel(const std::string& jobId) override;
   std::vector<JobStatus> list() override;
   std::string resultPath(const std::string& jobId, const std::string& format) override;
+  void deleteJob(const std::string& jobId) override;
+  SubmitQuotas quotas() const override { return opt_.quotas; }
 
   // For operators (coordinator/snapshot.cpp): every job and worker as of now, and the developed image of a
   // job's accepted tasks (the preview's develop step, as PNG bytes).
@@ -100,6 +104,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     PartialResult merged;
     uint32_t mergedTasks = 0;
     std::map<uint32_t, PartialResult> waiting;
+    std::string client;    // who submitted it (this process only): the jobs-per-client quota
+    bool deleted = false;  // DeleteJob: files gone, invisible to clients; kept for threads still holding the id
   };
   struct LeaseRec {
     std::string workerId;
@@ -112,6 +118,8 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     Clock::time_point lastSeen;
   };
 
+  JobStatus submitChecked(SubmitRequest request);  // submit, before messages are cleaned of server paths
+  bool sceneInUse(const std::string& hash) const;  // by a job or a submission; caller holds mu_
   void recover();                          // reload the state directory (recovery.cpp)
   bool finalImagesExist(int64_t id) const;  // image.exr and image.png of a DONE job (recovery.cpp)
   Job& findJob(const std::string& jobId);  // FarmError NotFound; caller holds mu_
@@ -160,6 +168,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   std::map<int64_t, Job> jobs_;
   std::map<std::string, LeaseRec> leases_;
   std::map<std::string, WorkerRec> workers_;
+  std::map<std::string, int> bundlesInSubmit_;  // scene hash -> submissions using its directory right now
   uint64_t nextLease_ = 1, nextWorker_ = 1;
   std::string instance_;                // random per process: ids never collide across restarts
   bool stopping_ = false;

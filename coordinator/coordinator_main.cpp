@@ -74,6 +74,18 @@ int main(int argc, char** argv) {
   std::string crashAt;
   app.add_option("--debug-crash-at", crashAt, "tests: SIGKILL itself at a named point (coordinator/crash_point.h)")
       ->group("");  // hidden
+  app.add_option("--scene-root", opt.sceneRoot,
+                 "let clients submit a scene by its path under this directory (off by default: clients upload "
+                 "the scene's files); such a scene reads only files under it");
+  app.add_option("--max-bundle-bytes", opt.quotas.maxBundleBytes, "largest scene bundle a client may upload (bytes)")
+      ->check(CLI::Range(uint64_t(1), uint64_t(4) << 30))->capture_default_str();
+  app.add_option("--max-bundle-files", opt.quotas.maxBundleFiles, "most files in one scene bundle")
+      ->check(CLI::Range(1u, 1000000u))->capture_default_str();
+  app.add_option("--max-jobs-per-client", opt.quotas.maxJobsPerClient,
+                 "most unfinished jobs one client (peer host) may have")
+      ->check(CLI::Range(1u, 1000000u))->capture_default_str();
+  app.add_option("--max-job-name", opt.quotas.maxJobNameBytes, "longest job name (bytes)")
+      ->check(CLI::Range(0u, 1u << 20))->capture_default_str();
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results

@@ -39,7 +39,8 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
 
   CoordinatorProcess coord = startCoordinatorProcess(
       bin + "/mltfarm-coordinator",
-      {"--state-dir", result.stateDir, "--token-file", tokenFile, "--heartbeat", "0.5", "--lease-timeout", "10"},
+      {"--state-dir", result.stateDir, "--token-file", tokenFile, "--heartbeat", "0.5", "--lease-timeout", "10",
+       "--scene-root", fs::absolute(o.scenePath).parent_path().string()},
       result.stateDir + "/coordinator.log");
   std::vector<ChildProcess> workers;
   for (int i = 0; i < W; ++i)

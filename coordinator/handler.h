@@ -10,6 +10,14 @@
 
 namespace mlt::farm {
 
+// Limits on what one submission may hold (the coordinator's --max-* options).
+struct SubmitQuotas {
+  uint64_t maxBundleBytes = 1ull << 30;  // the uploaded (or collected) files together
+  uint32_t maxBundleFiles = 10000;
+  uint32_t maxJobsPerClient = 1000;      // unfinished jobs (queued, planning, running, merging) per client
+  uint32_t maxJobNameBytes = 1024;
+};
+
 class ClientHandler {
  public:
   virtual ~ClientHandler() = default;
@@ -22,6 +30,11 @@ class ClientHandler {
   virtual std::vector<JobStatus> list() = 0;
   // Path of the finished image ("exr" or "png"); FailedPrecondition until the job is done.
   virtual std::string resultPath(const std::string& jobId, const std::string& format) = 0;
+  // Removes a finished, failed or cancelled job and its files (FailedPrecondition while it runs).
+  virtual void deleteJob(const std::string& /*jobId*/) {
+    throw FarmError(FarmError::Code::FailedPrecondition, "DeleteJob: not supported by this handler");
+  }
+  virtual SubmitQuotas quotas() const { return {}; }  // the transport enforces the bundle limits while receiving
 };
 
 // What an upload announces in its header, checked before a byte of its film is read or reserved.

@@ -118,6 +118,12 @@ void JobStore::setPlan(int64_t id, const std::string& plan, uint32_t tasks, int 
   s.step();
 }
 
+void JobStore::deleteJob(int64_t id) {
+  Stmt s(db_, "DELETE FROM jobs WHERE id=?", path_);  // AUTOINCREMENT: the id is never given out again
+  s.bind(1, id);
+  s.step();
+}
+
 std::vector<JobRecord> JobStore::loadJobs() {
   Stmt s(db_, "SELECT id, name, priority, state, settings, scene_hash, scene_file, plan, tasks, error,"
               " submitted_at FROM jobs ORDER BY id", path_);

@@ -36,6 +36,7 @@ class JobStore {
   void updateState(int64_t id, int state, const std::string& error);
   void setPlan(int64_t id, const std::string& plan, uint32_t tasks, int state);
   std::vector<JobRecord> loadJobs();
+  void deleteJob(int64_t id);
 
  private:
   void exec(const char* sql);

@@ -4,7 +4,11 @@
 #include "common/job/executor.h"
 #include "common/methods/image_metadata.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <map>
@@ -91,42 +95,87 @@ void writePartialExr(const std::string& path, const JobIdentity& id, const JobPl
 }
 
 PartialExr readPartialExr(const std::string& path) {
-  FilmExr f = readFilmExr(path);
-  auto str = [&](const char* key) {
-    auto it = f.metadata.strings.find(key);
-    if (it == f.metadata.strings.end())
-      throw std::runtime_error(fmt::format("{}: not a farm partial film (no '{}' attribute)", path, key));
-    return it->second;
-  };
-  auto num = [&](const char* key) {
-    auto it = f.metadata.numbers.find(key);
-    if (it == f.metadata.numbers.end())
-      throw std::runtime_error(fmt::format("{}: not a farm partial film (no '{}' attribute)", path, key));
-    return it->second;
-  };
-  if (num("farm.wireVersion") != wire::kFormatVersion)
-    throw std::runtime_error(fmt::format("{}: farm format version {} (this build reads {})", path,
-                                         num("farm.wireVersion"), wire::kFormatVersion));
+  // Everything the header claims is checked against the plan it carries before a pixel is allocated.
   PartialExr p;
-  p.id = {str("farm.job"), str("farm.sceneHash"), str("farm.scene")};
+  std::string headerBytes;
+  FilmExr f = readFilmExr(path, [&](const FilmExrHeader& h) {
+    auto str = [&](const char* key) {
+      auto it = h.metadata.strings.find(key);
+      if (it == h.metadata.strings.end())
+        throw std::runtime_error(fmt::format("{}: not a farm partial film (no '{}' attribute)", path, key));
+      return it->second;
+    };
+    auto num = [&](const char* key) {
+      auto it = h.metadata.numbers.find(key);
+      if (it == h.metadata.numbers.end())
+        throw std::runtime_error(fmt::format("{}: not a farm partial film (no '{}' attribute)", path, key));
+      return it->second;
+    };
+    auto index = [&](const char* key) {  // a count or index: an integer in [0, 2^32)
+      const double v = num(key);
+      if (!(v >= 0 && v < 4294967296.0) || v != std::floor(v))
+        throw std::runtime_error(fmt::format("{}: {} = {} is not a count", path, key, v));
+      return uint32_t(v);
+    };
+    if (num("farm.wireVersion") != wire::kFormatVersion)
+      throw std::runtime_error(fmt::format("{}: farm format version {} (this build reads {})", path,
+                                           num("farm.wireVersion"), wire::kFormatVersion));
+    p.id = {str("farm.job"), str("farm.sceneHash"), str("farm.scene")};
+    try {
+      p.planBytes = fromHex(str("farm.plan"), path);
+      p.plan = wire::parseJobPlan(p.planBytes);  // validates sizes, depths, unit path lengths
+      headerBytes = fromHex(str("farm.partial"), path);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(fmt::format("{}: corrupt farm metadata: {}", path, e.what()));
+    }
+    p.task = index("farm.task");
+    p.tasks = index("farm.tasks");
+    const size_t planTasks = splitTasks(p.plan).size();
+    if (p.tasks != planTasks || p.task >= p.tasks)
+      throw std::runtime_error(fmt::format("{}: task {} of {}, but the plan splits into {} tasks", path, p.task,
+                                           p.tasks, planTasks));
+    if (h.width != p.plan.settings.width || h.height != p.plan.settings.height)
+      throw std::runtime_error(fmt::format("{}: data window {}x{} but the job's film is {}x{}", path, h.width,
+                                           h.height, p.plan.settings.width, p.plan.settings.height));
+    if (h.splatLayers.back() > wire::kMaxSplatLayer)
+      throw std::runtime_error(fmt::format("{}: splat layer {} beyond the largest a job has ({})", path,
+                                           h.splatLayers.back(), wire::kMaxSplatLayer));
+  });
+  if (!f.sumsVerified)
+    throw std::runtime_error(fmt::format("{}: no checksum of the raw sums (mltfarm.sumsSha256): not written by the "
+                                         "farm, or rewritten by another tool", path));
   try {
-    p.planBytes = fromHex(str("farm.plan"), path);
-    p.plan = wire::parseJobPlan(p.planBytes);
-    p.result = wire::partialFromHeaderBytes(fromHex(str("farm.partial"), path), std::move(f.film));
+    p.result = wire::partialFromHeaderBytes(headerBytes, std::move(f.film));
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(fmt::format("{}: corrupt farm metadata: {}", path, e.what()));
   }
-  p.task = uint32_t(num("farm.task"));
-  p.tasks = uint32_t(num("farm.tasks"));
-  if (p.result.film.width() != p.plan.settings.width || p.result.film.height() != p.plan.settings.height)
-    throw std::runtime_error(fmt::format("{}: film {}x{} but the plan says {}x{}", path, p.result.film.width(),
-                                         p.result.film.height(), p.plan.settings.width, p.plan.settings.height));
+  const TaskRange range = splitTasks(p.plan)[p.task];
+  std::vector<uint32_t> expect;
+  for (uint32_t u = range.begin; u < range.end; ++u) expect.push_back(u);
+  if (p.result.units != expect)
+    throw std::runtime_error(fmt::format("{}: task {} holds units {} but the plan says {}", path, p.task,
+                                         unitList(p.result.units), unitList(expect)));
   return p;
 }
+
+namespace {
+
+// The same file (or both names of one file): `-o` must not overwrite an input.
+bool sameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(a, b, ec)) return true;
+  return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+}
+
+}  // namespace
 
 void mergePartialExrs(const std::vector<std::string>& parts, const std::string& exrPath,
                       const std::string& pngPath) {
   if (parts.empty()) throw std::runtime_error("merge: no partial films given");
+  for (const std::string& part : parts)
+    for (const std::string& out : {exrPath, pngPath})
+      if (!out.empty() && sameFile(out, part))
+        throw std::runtime_error(fmt::format("merge: the output {} is one of the inputs", out));
   std::vector<PartialExr> loaded;
   for (const std::string& path : parts) loaded.push_back(readPartialExr(path));
   const PartialExr& first = loaded.front();
@@ -146,17 +195,12 @@ void mergePartialExrs(const std::vector<std::string>& parts, const std::string& 
                fmt::format("{}x{}", p.plan.settings.width, p.plan.settings.height));
     if (p.plan.norm.b != first.plan.norm.b) mismatch("b", fmt::format("{}", first.plan.norm.b), fmt::format("{}", p.plan.norm.b));
     if (p.planBytes != first.planBytes) mismatch("plan", "(first)", "(differs)");
-    if (p.tasks != first.tasks || p.task >= p.tasks)
-      throw std::runtime_error(fmt::format("merge: {}: task {} of {} is inconsistent", parts[i], p.task, p.tasks));
     auto [it, inserted] = byTask.emplace(p.task, i);
     if (!inserted)
       throw std::runtime_error(fmt::format("merge: task {} (units {}) appears twice: {} and {}", p.task,
                                            unitList(p.result.units), parts[it->second], parts[i]));
   }
-  const std::vector<TaskRange> tasks = splitTasks(first.plan);
-  if (tasks.size() != first.tasks)
-    throw std::runtime_error(fmt::format("merge: the plan splits into {} tasks but the files say {}", tasks.size(),
-                                         first.tasks));
+  const std::vector<TaskRange> tasks = splitTasks(first.plan);  // readPartialExr checked every file's count
   std::vector<std::string> missing;
   for (uint32_t t = 0; t < tasks.size(); ++t)
     if (!byTask.count(t)) missing.push_back(fmt::format("task {} (units {}-{})", t, tasks[t].begin, tasks[t].end - 1));
@@ -164,15 +208,20 @@ void mergePartialExrs(const std::vector<std::string>& parts, const std::string& 
     throw std::runtime_error(fmt::format("merge: {} of {} tasks missing: {}", missing.size(), tasks.size(),
                                          fmt::join(missing, ", ")));
   PartialResult merged = emptyPartial(first.plan);
-  for (auto& [t, i] : byTask) {
-    std::vector<uint32_t> expect;
-    for (uint32_t u = tasks[t].begin; u < tasks[t].end; ++u) expect.push_back(u);
-    if (loaded[i].result.units != expect)
-      throw std::runtime_error(fmt::format("merge: {}: task {} holds units {} but the plan says {}", parts[i], t,
-                                           unitList(loaded[i].result.units), unitList(expect)));
-    merged.add(loaded[i].result);
+  for (auto& [t, i] : byTask) merged.add(loaded[i].result);
+  // Written next to the outputs and renamed into place: a failure leaves no half-written image.
+  const std::string suffix = fmt::format(".tmp-{}", ::getpid());
+  const std::string tmpExr = exrPath + suffix, tmpPng = pngPath.empty() ? "" : pngPath + suffix;
+  try {
+    writeFinalImages(tmpExr, tmpPng, first.id, first.plan, merged);
+    std::filesystem::rename(tmpExr, exrPath);
+    if (!pngPath.empty()) std::filesystem::rename(tmpPng, pngPath);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmpExr, ec);
+    if (!tmpPng.empty()) std::filesystem::remove(tmpPng, ec);
+    throw;
   }
-  writeFinalImages(exrPath, pngPath, first.id, first.plan, merged);
 }
 
 }  // namespace mlt::farm

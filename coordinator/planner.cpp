@@ -41,7 +41,7 @@ void Coordinator::plannerLoop() {
 }
 
 void Coordinator::planOne(int64_t id) {
-  std::string file, jobId, recorded;
+  std::string file, dir, jobId, recorded;
   RenderSettings settings;
   std::map<std::string, std::string> defines;
   {
@@ -49,7 +49,8 @@ void Coordinator::planOne(int64_t id) {
     Job& job = jobs_.at(id);
     if (job.status.state != JobState::Queued) return;
     setState(job, JobState::Planning);
-    file = (fs::path(sceneDir(job.rec.sceneHash)) / job.rec.sceneFile).string();
+    dir = sceneDir(job.rec.sceneHash);
+    file = (fs::path(dir) / job.rec.sceneFile).string();
     defines = job.defines;
     jobId = job.status.jobId;
     recorded = job.rec.settings;
@@ -61,7 +62,7 @@ void Coordinator::planOne(int64_t id) {
     v1::RenderSettings ps;  // checked at submit; a job recorded by an older build may still be refused here
     if (!ps.ParseFromString(recorded)) throw std::runtime_error("the recorded settings do not parse");
     settings = wire::fromProto(ps).settings;
-    auto scene = buildRenderScene(loadSceneDesc(file, defines), settings.width, settings.height);
+    auto scene = buildRenderScene(loadSceneDesc(file, defines, dir), settings.width, settings.height);  // the bundle only
     spdlog::info("job={} event=bootstrap_start method={} bootstrap_samples={}", jobId, settings.method,
                  settings.bootstrapSamples);
     plan = std::make_shared<JobPlan>(planJob(*scene, settings));

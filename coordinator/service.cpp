@@ -13,6 +13,8 @@
 
 #include "coordinator/storage_error.h"
 #include "coordinator/auth.h"
+#include "common/core/clip.h"
+#include "coordinator/coordinator.h"  // formatJobId / parseJobId (ListJobs page tokens)
 #include "proto/farm_convert.h"
 #include "proto/sparse_film.h"
 #include "proto/mltfarm.grpc.pb.h"
@@ -24,7 +26,12 @@ using grpc::ServerContext;
 using grpc::Status;
 using grpc::StatusCode;
 
-constexpr uint64_t kMaxBundleBytes = 4ull << 30;
+// The client's host as gRPC names the peer ("ipv4:127.0.0.1:5000" -> "ipv4:127.0.0.1"): one client for
+// the jobs-per-client quota.
+std::string peerHost(const std::string& peer) {
+  const size_t colon = peer.rfind(':');
+  return colon == std::string::npos || peer.rfind("unix:", 0) == 0 ? peer : peer.substr(0, colon);
+}
 
 // Runs `body` with auth and exception mapping.
 template <class F>
@@ -44,15 +51,21 @@ Status guarded(ServerContext* ctx, const TokenCheck& token, const char* rpc, F&&
   }
 }
 
-// Appends a chunk to its file; chunks of a file arrive in order.
-void appendChunk(std::map<std::string, std::string>& files, uint64_t& total, const v1::FileChunk& c) {
+// Appends a chunk to its file; chunks of a file arrive in order. The bundle quotas hold while receiving.
+void appendChunk(std::map<std::string, std::string>& files, uint64_t& total, const v1::FileChunk& c,
+                 const SubmitQuotas& quota) {
   if (c.data().size() > wire::kMaxChunkBytes)
     throw wire::WireError("chunk.data", fmt::format("{} bytes exceeds the 1 MiB chunk limit", c.data().size()));
+  if (!files.count(c.path()) && files.size() >= quota.maxBundleFiles)
+    throw FarmError(FarmError::Code::ResourceExhausted,
+                    fmt::format("bundle: more than {} files (--max-bundle-files)", quota.maxBundleFiles));
+  if (total + c.data().size() > quota.maxBundleBytes)
+    throw FarmError(FarmError::Code::ResourceExhausted,
+                    fmt::format("bundle: more than {} bytes (--max-bundle-bytes)", quota.maxBundleBytes));
   std::string& f = files[c.path()];
   if (c.offset() != f.size())
-    throw wire::WireError("chunk.offset", fmt::format("file '{}': offset {} but {} bytes received", c.path(), c.offset(), f.size()));
+    throw wire::WireError("chunk.offset", fmt::format("file '{}': offset {} but {} bytes received", clipForMessage(c.path()), c.offset(), f.size()));
   total += c.data().size();
-  if (total > kMaxBundleBytes) throw wire::WireError("chunk", "bundle exceeds 4 GiB");
   f += c.data();
 }
 
@@ -70,13 +83,16 @@ class CoordinatorServiceImpl final : public v1::Coordinator::Service {
       wire::checkVersion(header.format_version(), "SubmitHeader");
       std::map<std::string, std::string> files;
       uint64_t total = 0;
+      const SubmitQuotas quota = h_.quotas();
       while (reader->Read(&msg)) {
         if (!msg.has_chunk()) throw wire::WireError("chunk", "only file chunks may follow the header");
-        appendChunk(files, total, msg.chunk());
+        appendChunk(files, total, msg.chunk(), quota);
       }
       std::vector<BundleFile> bundle;
       for (auto& [path, data] : files) bundle.push_back({path, std::move(data)});
-      JobStatus st = h_.submit(fromProto(header, std::move(bundle)));
+      SubmitRequest request = fromProto(header, std::move(bundle));
+      request.client = peerHost(ctx->peer());
+      JobStatus st = h_.submit(std::move(request));
       *resp->mutable_status() = toProto(st);
       return Status::OK;
     });
@@ -115,10 +131,37 @@ class CoordinatorServiceImpl final : public v1::Coordinator::Service {
     });
   }
 
+  // Pages in job id order: at most page_size jobs (default 100, at most 1000) and about 1 MiB of them
+  // (always at least one job), so a reply stays under the 4 MiB limit whatever the names hold.
   Status ListJobs(ServerContext* ctx, const v1::ListJobsRequest* req, v1::ListJobsResponse* resp) override {
     return guarded(ctx, token_, "ListJobs", [&] {
       wire::checkVersion(req->format_version(), "ListJobsRequest");
-      for (const JobStatus& s : h_.list()) *resp->add_jobs() = toProto(s);
+      const int64_t after = req->page_token().empty() ? 0 : parseJobId(req->page_token());
+      const size_t pageSize = req->page_size() == 0 ? 100 : std::min<size_t>(req->page_size(), 1000);
+      constexpr size_t kPageBytes = 1 << 20;
+      size_t bytes = 0;
+      std::string last;
+      bool more = false;
+      for (const JobStatus& s : h_.list()) {
+        if (parseJobId(s.jobId) <= after) continue;
+        v1::JobStatus p = toProto(s);
+        if (resp->jobs_size() > 0 && (size_t(resp->jobs_size()) >= pageSize || bytes + p.ByteSizeLong() > kPageBytes)) {
+          more = true;
+          break;
+        }
+        bytes += p.ByteSizeLong();
+        last = s.jobId;
+        *resp->add_jobs() = std::move(p);
+      }
+      if (more) resp->set_next_page_token(last);
+      return Status::OK;
+    });
+  }
+
+  Status DeleteJob(ServerContext* ctx, const v1::JobRef* req, v1::DeleteJobResponse*) override {
+    return guarded(ctx, token_, "DeleteJob", [&] {
+      wire::checkVersion(req->format_version(), "JobRef");
+      h_.deleteJob(req->job_id());
       return Status::OK;
     });
   }
@@ -296,6 +339,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
 }  // namespace
 
 grpc::Status statusFromException(std::exception_ptr e) {
+  constexpr size_t kMaxMessage = 4096;  // a backstop: messages echo client input only as a short prefix
   try {
     std::rethrow_exception(e);
   } catch (const FarmError& f) {
@@ -310,15 +354,16 @@ grpc::Status statusFromException(std::exception_ptr e) {
       case FarmError::Code::Internal: code = StatusCode::INTERNAL; break;
       case FarmError::Code::ResourceExhausted: code = StatusCode::RESOURCE_EXHAUSTED; break;
     }
-    return Status(code, f.what());
+    return Status(code, clipForMessage(f.what(), kMaxMessage));
   } catch (const wire::WireError& w) {
-    return Status(StatusCode::INVALID_ARGUMENT, w.what());
+    return Status(StatusCode::INVALID_ARGUMENT, clipForMessage(w.what(), kMaxMessage));
   } catch (const std::filesystem::filesystem_error& x) {  // the state directory: full, read-only, failing
     const FarmError f = storageError(x.what(), x.code().value());
     return Status(f.code() == FarmError::Code::ResourceExhausted ? StatusCode::RESOURCE_EXHAUSTED
-                                                                 : StatusCode::UNAVAILABLE, f.what());
+                                                                 : StatusCode::UNAVAILABLE,
+                  clipForMessage(f.what(), kMaxMessage));
   } catch (const std::exception& x) {
-    return Status(StatusCode::INTERNAL, x.what());
+    return Status(StatusCode::INTERNAL, clipForMessage(x.what(), kMaxMessage));
   } catch (...) {
     return Status(StatusCode::INTERNAL, "unknown error");
   }

@@ -276,6 +276,10 @@ JobPlan fromProto(const v1::JobPlan& p) {
   for (int i = 0; i < p.units_size(); ++i) {
     const auto& w = p.units(i);
     if (w.index() != uint32_t(i)) throw WireError("plan.units.index", fmt::format("unit {} has index {}", i, w.index()));
+    if (w.path_length() < -1 || w.path_length() > kMaxDepth)  // -1: all lengths; else a length up to max depth
+      throw WireError("plan.units.path_length", fmt::format("unit {}: {} outside [-1, {}]", i, w.path_length(), kMaxDepth));
+    if (w.sample_begin() > w.sample_end())
+      throw WireError("plan.units.sample_begin", fmt::format("unit {}: samples [{}, {})", i, w.sample_begin(), w.sample_end()));
     WorkUnit u;
     u.index = w.index();
     u.sampleBegin = w.sample_begin();

@@ -296,21 +296,22 @@ TEST(MitsubaLoader, TransformsComposeInDocumentOrder) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) EXPECT_NEAR(s.camera.toWorld.m[i][j], expected[i][j], 1e-12) << i << "," << j;
 
-  // 3.x forms: translate value, rotate value axis, per-axis scale, and an explicit matrix after them.
+  // 3.x forms: translate value, rotate value axis, per-axis scale, and an explicit matrix after them (the
+  // scale uniform: a sensor's to_world must be a similarity).
   const SceneDesc s2 = loadBody(d, R"(
   <sensor type="perspective"><float name="fov" value="45"/>
     <transform name="to_world">
       <translate value="1, 0, 0"/>
       <rotate value="0, 1, 0" angle="180"/>
-      <scale x="1" y="3" z="1"/>
+      <scale x="3" y="3" z="3"/>
       <matrix value="1 0 0 10  0 1 0 20  0 0 1 30  0 0 0 1"/>
     </transform>
   </sensor>
 )");
-  // p=(0,0,0): +(1,0,0) -> rot y 180 -> (-1,0,0) -> scale -> (-1,0,0) -> +(10,20,30) = (9,20,30).
-  expectVec(s2.camera.toWorld.point({0, 0, 0}), {9, 20, 30});
-  // p=(0,1,1): (1,1,1) -> (-1,1,-1) -> (-1,3,-1) -> (9,23,29).
-  expectVec(s2.camera.toWorld.point({0, 1, 1}), {9, 23, 29});
+  // p=(0,0,0): +(1,0,0) -> rot y 180 -> (-1,0,0) -> scale -> (-3,0,0) -> +(10,20,30) = (7,20,30).
+  expectVec(s2.camera.toWorld.point({0, 0, 0}), {7, 20, 30});
+  // p=(0,1,1): (1,1,1) -> (-1,1,-1) -> (-3,3,-3) -> (7,23,27).
+  expectVec(s2.camera.toWorld.point({0, 1, 1}), {7, 23, 27});
 }
 
 // ------------------------------------------------------------------------------------------------------
@@ -985,6 +986,30 @@ TEST(SceneHash, CoversReferencedFilesAndIgnoresLocation) {
   // So does editing the scene file itself.
   a.write("scene.xml", xml + "\n");
   EXPECT_NE(ha, sceneContentHash(sa));
+}
+
+// Three values the loader used to accept and the render scene refused later, without a line (issue 13's
+// loader fuzzing): now refused at load, naming file and line.
+TEST(MitsubaLoader, ValuesTheRenderSceneRefusesAreRefusedAtLoadWithTheirLine) {
+  TempDir d;
+  // A spot light's cutoff_angle 180 (the spot light takes (0, 180)).
+  expectError(d, sceneXml("<emitter type=\"spot\">\n  <float name=\"cutoff_angle\" value=\"180\"/>\n</emitter>\n"), 3,
+              "cutoff_angle must be in (0, 180)");
+  // A sensor's to_world that stretches one axis (a camera frame needs a similarity).
+  expectError(d, sceneXml("<sensor type=\"perspective\">\n  <transform name=\"to_world\">\n"
+                          "    <scale x=\"2\" y=\"1\" z=\"1\"/>\n  </transform>\n</sensor>\n"),
+              3, "to_world must be a rotation, translation, uniform scale or mirror");
+  // An emitting shape scaled to nothing (an area light needs a positive area).
+  expectError(d, sceneXml("<shape type=\"rectangle\">\n  <transform name=\"to_world\"><scale value=\"0\"/></transform>\n"
+                          "  <emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n</shape>\n"),
+              2, "an emitting shape must have a positive, finite area");
+  // What stays accepted: a cutoff just under 180, a uniformly scaled and mirrored camera, a lit rectangle.
+  const SceneDesc ok = loadBody(d, "<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"179\"/></emitter>\n"
+                                   "<sensor type=\"perspective\"><transform name=\"to_world\"><scale x=\"-2\" y=\"2\" z=\"2\"/>"
+                                   "</transform></sensor>\n"
+                                   "<shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape>\n");
+  EXPECT_EQ(ok.lights.size(), 1u);
+  EXPECT_EQ(ok.meshes.size(), 1u);
 }
 
 }  // namespace

@@ -67,9 +67,7 @@ PerspectiveCamera::PerspectiveCamera(const CameraDesc& desc) {
   const Vec3 ax = desc.toWorld.vector(Vec3(1, 0, 0)), ay = desc.toWorld.vector(Vec3(0, 1, 0)),
              az = desc.toWorld.vector(Vec3(0, 0, 1));
   const float lx = length(ax), ly = length(ay), lz = length(az);
-  const float tol = 1e-4f * std::fmax(lx, std::fmax(ly, lz));
-  if (!(lx > 0 && ly > 0 && lz > 0) || std::fabs(lx - ly) > tol || std::fabs(lx - lz) > tol ||
-      std::fabs(dot(ax, ay)) > tol * lx || std::fabs(dot(ax, az)) > tol * lx || std::fabs(dot(ay, az)) > tol * lx)
+  if (!desc.toWorld.isSimilarity())  // the loaders check the same at load, naming the line
     throw std::runtime_error("camera: to_world must be a rotation, translation, uniform scale or mirror");
   X_ = ax / lx;
   Y_ = ay / ly;

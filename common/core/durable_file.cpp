@@ -11,12 +11,14 @@
 #include <filesystem>
 #include <fmt/format.h>
 #include <stdexcept>
+#include <system_error>
 
 namespace mlt {
 namespace {
 
 [[noreturn]] void fail(const std::string& path, const char* what, int err) {
-  throw std::runtime_error(fmt::format("{}: cannot {}: {}", path, what, std::strerror(err)));
+  // A std::system_error (a std::runtime_error) keeps errno, so a caller can tell a full disk from the rest.
+  throw std::system_error(err, std::generic_category(), fmt::format("{}: cannot {}", path, what));
 }
 
 std::string parentOf(const std::string& path) {

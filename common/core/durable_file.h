@@ -11,7 +11,7 @@
 namespace mlt {
 
 // Writes `data` to `path` durably (see above), with permissions `mode` (e.g. 0600 for a secret).
-// Throws std::runtime_error naming the file and the system's reason.
+// Throws std::system_error (errno as its code) naming the file and the system's reason.
 void writeFileDurably(const std::string& path, std::string_view data, mode_t mode = 0644);
 
 // For a file another library wrote (an EXR, a PNG) at `tmpPath`, in the same directory as `path`:

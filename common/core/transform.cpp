@@ -85,6 +85,14 @@ bool Transform::isFinite() const {
   return true;
 }
 
+bool Transform::isSimilarity() const {
+  const Vec3 ax = vector(Vec3(1, 0, 0)), ay = vector(Vec3(0, 1, 0)), az = vector(Vec3(0, 0, 1));
+  const float lx = length(ax), ly = length(ay), lz = length(az);
+  const float tol = 1e-4f * std::fmax(lx, std::fmax(ly, lz));
+  return lx > 0 && ly > 0 && lz > 0 && std::fabs(lx - ly) <= tol && std::fabs(lx - lz) <= tol &&
+         std::fabs(dot(ax, ay)) <= tol * lx && std::fabs(dot(ax, az)) <= tol * lx && std::fabs(dot(ay, az)) <= tol * lx;
+}
+
 double Transform::determinant3x3() const {
   return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);

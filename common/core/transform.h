@@ -23,6 +23,9 @@ struct Transform {
   Transform transpose() const;
   bool isFinite() const;
   double determinant3x3() const;                  // < 0: the transform flips orientation
+  // A rotation, translation, uniform scale or mirror (what a camera's to_world may be): the images of
+  // the axes are non-zero, of equal length and orthogonal, to a relative tolerance of 1e-4.
+  bool isSimilarity() const;
 
   Vec3 point(const Vec3& p) const;
   Vec3 vector(const Vec3& v) const;

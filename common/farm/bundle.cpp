@@ -10,6 +10,8 @@
 #include "common/core/durable_file.h"
 #include "common/core/sha256.h"
 #include "common/scene/scene_loader.h"
+#include "common/core/clip.h"
+#include "common/scene/scene_files.h"
 
 namespace fs = std::filesystem;
 
@@ -28,7 +30,7 @@ std::string readFile(const fs::path& p) {
 
 void validateBundlePath(const std::string& path) {
   auto bad = [&](const char* why) {
-    throw FarmError(FarmError::Code::InvalidArgument, fmt::format("bundle path '{}': {}", path, why));
+    throw FarmError(FarmError::Code::InvalidArgument, fmt::format("bundle path '{}': {}", clipForMessage(path), why));
   };
   if (path.empty()) bad("empty");
   if (path.front() == '/') bad("absolute paths are not allowed");
@@ -46,30 +48,28 @@ void validateBundlePath(const std::string& path) {
   }
 }
 
-SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines) {
+SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines,
+                          const std::string& rootDir) {
+  const fs::path scenePath = fs::absolute(sceneFile).lexically_normal();
+  const std::string root = rootDir.empty() ? scenePath.parent_path().string() : rootDir;
   SceneDesc desc;
   try {
-    desc = loadScene(sceneFile, defines);
+    desc = loadScene(scenePath.string(), defines, root);  // the client's own paths: named in full
   } catch (const std::exception& e) {
     throw FarmError(FarmError::Code::InvalidArgument, e.what());
   }
-  const fs::path scenePath = fs::absolute(sceneFile).lexically_normal();
-  const fs::path root = scenePath.parent_path();
   std::vector<std::string> paths{scenePath.string()};
-  for (const std::string& f : desc.referencedFiles) paths.push_back(fs::absolute(f).lexically_normal().string());
+  paths.insert(paths.end(), desc.referencedFiles.begin(), desc.referencedFiles.end());
   SceneBundle bundle;
-  bundle.sceneFile = scenePath.filename().string();
   for (const std::string& p : paths) {
-    fs::path rel = fs::path(p).lexically_relative(root);
-    std::string r = rel.generic_string();
-    if (rel.empty() || r.rfind("..", 0) == 0)
+    const std::optional<std::string> rel = pathInsideRoot(root, p);  // the loader checked; the bundle relies on it
+    if (!rel)
       throw FarmError(FarmError::Code::InvalidArgument,
-                      fmt::format("{}: referenced file {} lies outside the scene's directory {}; "
-                                  "submit with a coordinator-readable path instead",
-                                  sceneFile, p, root.string()));
-    if (std::any_of(bundle.files.begin(), bundle.files.end(), [&](const BundleFile& f) { return f.path == r; }))
+                      fmt::format("{}: referenced file {} lies outside {}", sceneFile, p, root));
+    if (p == paths.front()) bundle.sceneFile = *rel;
+    if (std::any_of(bundle.files.begin(), bundle.files.end(), [&](const BundleFile& f) { return f.path == *rel; }))
       continue;
-    bundle.files.push_back({r, readFile(p)});
+    bundle.files.push_back({*rel, readFile(p)});
   }
   std::sort(bundle.files.begin(), bundle.files.end(), [](auto& a, auto& b) { return a.path < b.path; });
   return bundle;

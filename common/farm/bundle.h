@@ -14,10 +14,13 @@ struct SceneBundle {
   std::string sceneFile;          // the scene file's path inside the bundle
 };
 
-// Loads the scene (for its list of referenced files) and reads every file. Referenced files must lie
-// under the scene file's directory. Throws FarmError(InvalidArgument) with the loader's message.
+// Loads the scene (for its list of referenced files) and reads every file. The scene and the files it
+// references must lie inside `root` (default: the scene file's directory), which becomes the bundle's
+// root: the loader refuses anything else (common/scene/scene_files.h), naming file and line. Throws
+// FarmError(InvalidArgument) with the loader's message.
 // `defines`: the scene's -D parameters (they may name the referenced files).
-SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines = {});
+SceneBundle collectBundle(const std::string& sceneFile, const std::map<std::string, std::string>& defines = {},
+                          const std::string& root = {});
 // Hex SHA-256 over the sorted (path, size, bytes) triples: the same value as sceneContentHash
 // (common/scene/scene_hash.h) for a scene whose files all lie under its directory.
 std::string bundleHash(const std::vector<BundleFile>& files);

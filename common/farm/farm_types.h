@@ -60,6 +60,7 @@ struct SubmitRequest {
   std::string bundleSceneFile;
   std::string coordinatorPath;
   std::string bundleHash;  // the client's hash of the bundle; checked if set
+  std::string client;      // who submits (the transport's peer host): jobs-per-client quota
 };
 
 // A lease: a fixed, contiguous range of work units [unitBegin, unitEnd) of one job (a "task").

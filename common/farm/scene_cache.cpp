@@ -36,6 +36,10 @@ std::shared_ptr<const RenderScene> SceneCache::get(const std::string& sceneHash,
   const fs::path dir = fs::path(dir_) / sceneHash;
   if (!fs::exists(dir)) {
     std::vector<BundleFile> files = fetch_(sceneHash);
+    // The scene hash covers every byte this worker will read: a bundle that does not hash to it is refused.
+    if (const std::string got = bundleHash(files); got != sceneHash)
+      throw FarmError(FarmError::Code::InvalidArgument,
+                      fmt::format("scene {}: the fetched bundle hashes to {}", sceneHash.substr(0, 12), got.substr(0, 12)));
     const fs::path tmp = dir.string() + fmt::format(".tmp-{}", getpid());
     fs::remove_all(tmp);
     writeBundle(tmp.string(), files);
@@ -45,7 +49,8 @@ std::shared_ptr<const RenderScene> SceneCache::get(const std::string& sceneHash,
     else syncDirectory(dir.parent_path().string());
     spdlog::info("event=scene_cached scene_hash={} files={}", sceneHash.substr(0, 12), files.size());
   }
-  SceneDesc desc = loadSceneDesc((dir / sceneFile).string(), defines);
+  validateBundlePath(sceneFile);
+  SceneDesc desc = loadSceneDesc((dir / sceneFile).string(), defines, dir.string());  // the bundle's files only
   entry->scene = buildRenderScene(std::move(desc), width, height);
   return entry->scene;
 }

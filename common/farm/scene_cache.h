@@ -22,7 +22,9 @@ class SceneCache {
   SceneCache(std::string cacheDir, FetchBundle fetch);
 
   // The render scene of `sceneFile` in the bundle `sceneHash`, loaded with `defines`, for a film of
-  // width x height. Thread-safe. Errors: FarmError(InvalidArgument) from the loader, or the fetch's.
+  // width x height. Thread-safe. The fetched bundle must hash to `sceneHash`, and the scene may read only
+  // the bundle's files. Errors: FarmError(InvalidArgument) from the loader or a bundle that does not match
+  // its hash, or the fetch's.
   std::shared_ptr<const RenderScene> get(const std::string& sceneHash, const std::string& sceneFile,
                                          const std::map<std::string, std::string>& defines, int width, int height);
 

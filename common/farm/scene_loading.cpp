@@ -1,16 +1,31 @@
 // Scene loading shared by coordinator and worker (see scene_loading.h).
 #include "common/farm/scene_loading.h"
 
+#include <filesystem>
+
 #include "common/farm/farm_types.h"
 #include "common/scene/scene_loader.h"
 
 namespace mlt::farm {
 
-SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines) {
+std::string hideRoot(std::string message, const std::string& root) {
+  if (root.empty()) return message;
+  for (std::string prefix : {root, std::filesystem::absolute(root).lexically_normal().string()}) {
+    if (prefix.empty()) continue;
+    if (prefix.back() != '/') prefix += '/';
+    if (prefix == "/" || prefix == "./") continue;
+    for (size_t at = message.find(prefix); at != std::string::npos; at = message.find(prefix, at))
+      message.erase(at, prefix.size());
+  }
+  return message;
+}
+
+SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std::string>& defines,
+                        const std::string& root) {
   try {
-    return loadScene(path, defines);
+    return loadScene(path, defines, root);
   } catch (const std::exception& e) {
-    throw FarmError(FarmError::Code::InvalidArgument, e.what());
+    throw FarmError(FarmError::Code::InvalidArgument, root.empty() ? e.what() : hideRoot(e.what(), root));
   }
 }
 

@@ -14,9 +14,13 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <set>
+
+#include "common/core/sha256.h"
 #include <stdexcept>
 
 namespace mlt {
@@ -26,6 +30,8 @@ namespace {
 constexpr const char* kFormatAttr = "mltfarm.format";
 constexpr const char* kFormatVersionAttr = "mltfarm.formatVersion";
 constexpr const char* kNonFiniteAttr = "mltfarm.nonFiniteSamples";
+constexpr const char* kSumsChecksumAttr = "mltfarm.sumsSha256";
+constexpr int kMaxSide = 16384;  // the farm's film limit (proto/convert.cpp kMaxFilmSide)
 constexpr const char* kPartialFilmFormat = "partial-film";
 constexpr int kPartialFilmVersion = 1;
 
@@ -40,7 +46,7 @@ const std::set<std::string>& reservedNames() {
 
 // Header attributes writeFilmExr adds itself.
 bool isInternal(const std::string& name) {
-  return name == kFormatAttr || name == kFormatVersionAttr || name == kNonFiniteAttr;
+  return name == kFormatAttr || name == kFormatVersionAttr || name == kNonFiniteAttr || name == kSumsChecksumAttr;
 }
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
@@ -82,6 +88,9 @@ void checkReadable(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an EXR file");
+  if (!std::filesystem::is_regular_file(path, ec)) fail(path, "not a regular file (a FIFO, device or socket is not read)");
+  static std::once_flag limitSet;  // OpenEXR refuses larger data windows before allocating for them
+  std::call_once(limitSet, [] { Imf::Header::setMaxImageSize(kMaxSide, kMaxSide); });
   bool tiled = false, deep = false, multiPart = false;
   if (!Imf::isOpenExrFile(path.c_str(), tiled, deep, multiPart)) fail(path, "not an OpenEXR file");
   if (deep) fail(path, "deep EXR files are not supported");
@@ -228,6 +237,25 @@ const double* fieldData(const Film& film, const DoubleField& f) {
   return reinterpret_cast<const double*>(film.splatLayer(size_t(f.layer)).data());
 }
 
+// SHA-256 (hex) over "WxH nonFinite", then per field its name, '\0', its hi and lo words (little-endian).
+std::string sumsChecksum(int width, int height, uint64_t nonFinite, const std::vector<DoubleField>& fields,
+                         const std::vector<std::vector<uint32_t>>& words) {
+  Sha256 sha;
+  sha.update(std::to_string(width) + "x" + std::to_string(height) + " " + std::to_string(nonFinite));
+  std::vector<uint8_t> bytes;
+  for (size_t f = 0; f < fields.size(); ++f) {
+    sha.update(fields[f].name + '\0');
+    for (int half = 0; half < 2; ++half) {
+      const std::vector<uint32_t>& w = words[2 * f + half];
+      bytes.resize(4 * w.size());
+      for (size_t i = 0; i < w.size(); ++i)
+        for (int b = 0; b < 4; ++b) bytes[4 * i + b] = uint8_t(w[i] >> (8 * b));
+      sha.update(bytes.data(), bytes.size());
+    }
+  }
+  return sha.hexDigest();
+}
+
 }  // namespace
 
 void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata& metadata,
@@ -269,6 +297,8 @@ void writeFilmExr(const std::string& path, const Film& film, const ImageMetadata
                                  sizeof(uint32_t), sizeof(uint32_t) * size_t(width)));
     }
   }
+  header.insert(kSumsChecksumAttr,
+                Imf::StringAttribute(sumsChecksum(width, height, film.nonFiniteSamples(), fields, words)));
   writeFrame(path, header, fb, height);
 }
 
@@ -283,7 +313,7 @@ bool isFilmExr(const std::string& path) {
   }
 }
 
-FilmExr readFilmExr(const std::string& path) {
+FilmExr readFilmExr(const std::string& path, const std::function<void(const FilmExrHeader&)>& check) {
   checkReadable(path);
   try {
     Imf::InputFile file(path.c_str());
@@ -298,8 +328,15 @@ FilmExr readFilmExr(const std::string& path) {
     if (header.displayWindow() != s.dw)
       fail(path, "size mismatch: data window differs from display window");
 
+    const auto* checksum = header.findTypedAttribute<Imf::StringAttribute>(kSumsChecksumAttr);
+    const auto* nfAttr = header.findTypedAttribute<Imf::DoubleAttribute>(kNonFiniteAttr);
+    const double nf = nfAttr ? nfAttr->value() : 0.0;
+    if (!(nf >= 0 && nf <= 9007199254740992.0) || nf != std::floor(nf)) fail(path, std::string("invalid ") + kNonFiniteAttr);
+    const std::vector<uint32_t> layers = layersInHeader(path, header);
+    if (check) check({s.width, s.height, layers, readMetadata(header, false)});  // before any allocation
+
     const size_t n = size_t(s.width) * size_t(s.height);
-    const std::vector<DoubleField> fields = filmFields(layersInHeader(path, header));
+    const std::vector<DoubleField> fields = filmFields(layers);
     std::vector<std::vector<uint32_t>> words(2 * fields.size(), std::vector<uint32_t>(n));
     Imf::FrameBuffer fb;
     for (size_t f = 0; f < fields.size(); ++f) {
@@ -315,8 +352,10 @@ FilmExr readFilmExr(const std::string& path) {
     }
     file.setFrameBuffer(fb);
     file.readPixels(s.dw.min.y, s.dw.max.y);
+    if (checksum && sumsChecksum(s.width, s.height, uint64_t(nf), fields, words) != checksum->value())
+      fail(path, "the raw sums do not match their checksum (the file was rewritten, e.g. through float, or is corrupt)");
 
-    FilmExr out{Film(s.width, s.height), readMetadata(header, false)};
+    FilmExr out{Film(s.width, s.height), readMetadata(header, false), checksum != nullptr};
     for (size_t f = 0; f < fields.size(); ++f) {
       double* data = fieldData(out.film, fields[f]);
       for (size_t i = 0; i < n; ++i) {
@@ -324,8 +363,7 @@ FilmExr readFilmExr(const std::string& path) {
         data[i * fields[f].stride + fields[f].offset] = std::bit_cast<double>(bits);
       }
     }
-    if (const auto* nf = header.findTypedAttribute<Imf::DoubleAttribute>(kNonFiniteAttr))
-      out.film.setNonFiniteSamples(uint64_t(nf->value()));
+    out.film.setNonFiniteSamples(uint64_t(nf));
     return out;
   } catch (const std::runtime_error& e) {
     if (std::string(e.what()).rfind(path + ":", 0) == 0) throw;

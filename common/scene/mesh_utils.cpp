@@ -118,6 +118,16 @@ void computeSmoothNormals(MeshDesc& mesh) {
   mesh.normals = std::move(acc);
 }
 
+bool hasPositiveArea(const MeshDesc& mesh) {
+  double total = 0;  // the area light's sum (area_light.cpp)
+  for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+    const uint32_t a = mesh.indices[i], b = mesh.indices[i + 1], c = mesh.indices[i + 2];
+    if (a >= mesh.positions.size() || b >= mesh.positions.size() || c >= mesh.positions.size()) return false;
+    total += 0.5 * double(length(cross(mesh.positions[b] - mesh.positions[a], mesh.positions[c] - mesh.positions[a])));
+  }
+  return total > 0 && std::isfinite(total);
+}
+
 void validateMesh(const MeshDesc& mesh) {
   if (mesh.indices.size() % 3 != 0) throw std::runtime_error("index count is not a multiple of 3");
   if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())

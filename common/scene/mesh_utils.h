@@ -31,6 +31,10 @@ void flipMesh(MeshDesc& mesh);
 // for meshes without normals unless face_normals is set).
 void computeSmoothNormals(MeshDesc& mesh);
 
+// The mesh's total triangle area (world space once transformed) is positive and finite, as an area
+// light needs (common/emitter/area_light.cpp).
+bool hasPositiveArea(const MeshDesc& mesh);
+
 // Throws std::runtime_error (message without location) if an index is out of range, a value is not
 // finite, or the per-vertex arrays have inconsistent sizes.
 void validateMesh(const MeshDesc& mesh);

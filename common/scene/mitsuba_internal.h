@@ -15,7 +15,8 @@ namespace mlt::mitsuba {
 
 class Loader {
  public:
-  explicit Loader(const std::map<std::string, std::string>& defines) : defines_(defines) {}
+  // `root`: when non-empty, every file the scene reads must lie inside it (common/scene/scene_files.h).
+  Loader(const std::map<std::string, std::string>& defines, std::string root) : defines_(defines), root_(std::move(root)) {}
   SceneDesc load(const std::string& path);
 
   // Splits a plugin element's children into properties and nested plugin elements (<bsdf>, <emitter>,
@@ -41,7 +42,8 @@ class Loader {
     std::optional<TextureDesc> texture;  // a textured radiance
   };
   AreaEmission parseAreaEmitter(const XmlElement& el);
-  // Resolves a file name relative to the referencing file, then the main scene's folder; records it.
+  // Resolves a file name relative to the referencing file, then the main scene's folder (confined to
+  // root_ if set: resolveSceneFile); records it. Errors name the element's file and line.
   std::string resolveFile(const XmlElement& el, const std::string& filename, const char* what);
   void warn(const XmlElement& el, const std::string& msg);
   int defaultBsdf();
@@ -58,6 +60,7 @@ class Loader {
   std::vector<std::unique_ptr<XmlElement>> docs_;  // keeps every parsed document alive
   std::set<std::string> includeStack_;
   std::string mainFile_, mainDir_;
+  std::string root_;  // confinement directory (empty: none)
   int majorVersion_ = 3;
   bool haveSensor_ = false;
   int defaultBsdf_ = -1;

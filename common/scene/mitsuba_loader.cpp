@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "common/scene/mitsuba_internal.h"
+#include "common/scene/scene_files.h"
 
 namespace fs = std::filesystem;
 
@@ -162,27 +163,11 @@ void Loader::collect(const XmlElement& el, PropertyList& props, std::vector<cons
 }
 
 std::string Loader::resolveFile(const XmlElement& el, const std::string& filename, const char* what) {
-  if (filename.empty()) failAt(el, std::string(what) + ": empty file name");
-  const fs::path p(filename);
-  std::vector<fs::path> candidates;
-  if (p.is_absolute()) {
-    candidates.push_back(p);
-  } else {
-    candidates.push_back(fs::path(el.file).parent_path() / p);
-    candidates.push_back(fs::path(mainDir_) / p);
-  }
-  std::string tried;
-  for (const fs::path& c : candidates) {
-    std::error_code ec;
-    if (fs::is_regular_file(c, ec)) {
-      const std::string abs = fs::absolute(c).lexically_normal().string();
-      if (std::find(scene_.referencedFiles.begin(), scene_.referencedFiles.end(), abs) == scene_.referencedFiles.end())
-        scene_.referencedFiles.push_back(abs);
-      return abs;
-    }
-    tried += (tried.empty() ? "" : ", ") + c.string();
-  }
-  failAt(el, std::string(what) + " '" + filename + "' not found (tried " + tried + ")");
+  const ResolvedFile r = resolveSceneFile(filename, el.file, mainDir_, root_);
+  if (!r.error.empty()) failAt(el, std::string("filename (") + what + "): " + r.error);
+  if (std::find(scene_.referencedFiles.begin(), scene_.referencedFiles.end(), r.path) == scene_.referencedFiles.end())
+    scene_.referencedFiles.push_back(r.path);
+  return r.path;
 }
 
 void Loader::warn(const XmlElement& el, const std::string& msg) {
@@ -247,7 +232,11 @@ void Loader::parseSensor(const XmlElement& el) {
   cam.nearClip = float(props.getFloat("near_clip", 1e-2));
   const double farClip = props.getFloat("far_clip", 1e4);
   if (!(cam.nearClip > 0) || !(farClip > cam.nearClip)) failAt(el, "need 0 < near_clip < far_clip");
-  if (auto t = props.optTransform("to_world")) cam.toWorld = *t;
+  if (auto t = props.optTransform("to_world")) {
+    if (!t->isFinite() || !t->isSimilarity())
+      props.fail(*props.find("to_world"), "a sensor's to_world must be a rotation, translation, uniform scale or mirror");
+    cam.toWorld = *t;
+  }
   if (cam.type == CameraDesc::Type::ThinLens) {
     auto ap = props.optFloat("aperture_radius");
     auto fd = props.optFloat("focus_distance");
@@ -409,8 +398,9 @@ void Loader::parseEmitter(const XmlElement& el) {
       light.direction = normalize(T.vector({0, 0, 1}));
       light.cutoffAngleDeg = float(props.getFloat("cutoff_angle", 20.0));
       light.beamWidthDeg = float(props.getFloat("beam_width", light.cutoffAngleDeg * 3.0 / 4.0));
-      if (!(light.cutoffAngleDeg > 0 && light.cutoffAngleDeg <= 180) || !(light.beamWidthDeg > 0))
-        failAt(el, "spot angles must be positive and cutoff_angle <= 180");
+      if (!(light.cutoffAngleDeg > 0 && light.cutoffAngleDeg < 180))  // the spot light's own range
+        props.fail(*props.find("cutoff_angle"), "cutoff_angle must be in (0, 180) degrees");
+      if (!(light.beamWidthDeg > 0)) props.fail(*props.find("beam_width"), "beam_width must be positive");
       if (light.beamWidthDeg > light.cutoffAngleDeg) light.beamWidthDeg = light.cutoffAngleDeg;
       break;
     }
@@ -438,8 +428,9 @@ void Loader::parseEmitter(const XmlElement& el) {
 
 }  // namespace mitsuba
 
-SceneDesc loadMitsubaScene(const std::string& path, const std::map<std::string, std::string>& defines) {
-  mitsuba::Loader loader(defines);
+SceneDesc loadMitsubaScene(const std::string& path, const std::map<std::string, std::string>& defines,
+                           const std::string& root) {
+  mitsuba::Loader loader(defines, root);
   return loader.load(path);
 }
 

@@ -14,6 +14,8 @@ namespace mlt {
 
 // `defines` are Mitsuba's command-line -D name=value parameters; they override <default> values and
 // are substituted for $name in every attribute.
-SceneDesc loadMitsubaScene(const std::string& path, const std::map<std::string, std::string>& defines = {});
+// `root`: when non-empty, the scene may read only files inside this directory (scene_files.h).
+SceneDesc loadMitsubaScene(const std::string& path, const std::map<std::string, std::string>& defines = {},
+                           const std::string& root = {});
 
 }  // namespace mlt

@@ -1,5 +1,7 @@
 #include "common/scene/mitsuba_props.h"
 
+#include "common/core/clip.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -25,7 +27,7 @@ std::string mitsubaName(const std::string& name) {
 std::string describe(const XmlElement& el) {
   std::string s = "<" + el.name;
   for (const char* a : {"type", "name", "id"})
-    if (const XmlAttribute* at = el.find(a)) s += std::string(" ") + a + "=\"" + at->value + "\"";
+    if (const XmlAttribute* at = el.find(a)) s += std::string(" ") + a + "=\"" + clipForMessage(at->value, 64) + "\"";
   return s + ">";
 }
 

@@ -103,6 +103,7 @@ void Loader::parseShape(const XmlElement& el) {
       failAt(*n, "unsupported element inside " + describe(el));
     }
   }
+  if (mesh.emission && !hasPositiveArea(mesh)) failAt(el, "an emitting shape must have a positive, finite area");
   if (mesh.bsdf < 0) {
     mesh.bsdf = defaultBsdf();
     warn(el, "shape has no bsdf; using a diffuse bsdf with reflectance 0.5 (as Mitsuba does)");

@@ -35,6 +35,8 @@ struct GraphicsState {
 
 class Loader {
  public:
+  // `root`: when non-empty, every file the scene reads must lie inside it (common/scene/scene_files.h).
+  explicit Loader(std::string root = {}) : root_(std::move(root)) {}
   SceneDesc load(const std::string& path);
 
  private:
@@ -68,6 +70,7 @@ class Loader {
   size_t pos_ = 0;
   SceneDesc scene_;
   std::string mainDir_;
+  std::string root_;  // confinement directory (empty: none)
   std::set<std::string> includeStack_;
   std::vector<GraphicsState> stack_;
   std::vector<Transform> transformStack_;

@@ -11,6 +11,7 @@
 #include "common/scene/mesh_readers.h"
 #include "common/scene/mesh_utils.h"
 #include "common/scene/pbrt_internal.h"
+#include "common/scene/scene_files.h"
 
 namespace fs = std::filesystem;
 
@@ -99,24 +100,11 @@ ParamList Loader::readParams(const std::string& directive, const Token& where) {
 }
 
 std::string Loader::resolve(const Token& where, const std::string& file, const char* what) {
-  if (file.empty()) failAt(where, std::string(what) + ": empty file name");
-  fs::path p(file);
-  std::vector<fs::path> candidates;
-  if (p.is_absolute()) candidates.push_back(p);
-  else {
-    candidates.push_back(fs::path(where.file).parent_path() / p);
-    candidates.push_back(fs::path(mainDir_) / p);
-  }
-  for (const fs::path& c : candidates) {
-    std::error_code ec;
-    if (fs::is_regular_file(c, ec)) {
-      const std::string s = fs::absolute(c).lexically_normal().string();
-      if (std::find(scene_.referencedFiles.begin(), scene_.referencedFiles.end(), s) == scene_.referencedFiles.end())
-        scene_.referencedFiles.push_back(s);
-      return s;
-    }
-  }
-  failAt(where, std::string(what) + " '" + file + "' not found");
+  const ResolvedFile r = resolveSceneFile(file, where.file, mainDir_, root_);
+  if (!r.error.empty()) failAt(where, std::string(what) + ": " + r.error);
+  if (std::find(scene_.referencedFiles.begin(), scene_.referencedFiles.end(), r.path) == scene_.referencedFiles.end())
+    scene_.referencedFiles.push_back(r.path);
+  return r.path;
 }
 
 void Loader::include(const Token& where) {
@@ -481,6 +469,7 @@ void Loader::addMesh(MeshDesc mesh, bool analytic, const Token& where) {
     return;
   }
   if (gs_.areaLight) {
+    if (!hasPositiveArea(mesh)) failAt(where, "Shape: an area light's shape must have a positive, finite area");
     mesh.emission = gs_.areaLight->L;
     if (gs_.areaLight->twoSided) {
       MeshDesc back = mesh;
@@ -494,6 +483,6 @@ void Loader::addMesh(MeshDesc mesh, bool analytic, const Token& where) {
 
 }  // namespace pbrt
 
-SceneDesc loadPbrtScene(const std::string& path) { return pbrt::Loader().load(path); }
+SceneDesc loadPbrtScene(const std::string& path, const std::string& root) { return pbrt::Loader(root).load(path); }
 
 }  // namespace mlt

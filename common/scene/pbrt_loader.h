@@ -29,7 +29,8 @@
 
 namespace mlt {
 
-SceneDesc loadPbrtScene(const std::string& path);
+// `root`: when non-empty, the scene may read only files inside this directory (scene_files.h).
+SceneDesc loadPbrtScene(const std::string& path, const std::string& root = {});
 
 // pbrt-v3's RoughnessToAlpha (a polynomial in log(roughness), roughness clamped to >= 1e-3).
 float pbrtRoughnessToAlpha(float roughness);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "common/core/sha256.h"
+#include "common/scene/scene_files.h"
 
 namespace fs = std::filesystem;
 
@@ -17,9 +18,8 @@ std::vector<BundleFile> sceneBundleFiles(const SceneDesc& scene) {
   std::vector<BundleFile> files;
   auto add = [&](const std::string& p) {
     const fs::path abs = fs::absolute(p).lexically_normal();
-    const fs::path rel = abs.lexically_relative(dir);
-    const bool inside = !rel.empty() && *rel.begin() != "..";
-    files.push_back({inside ? rel.generic_string() : abs.generic_string(), abs.string()});
+    const std::optional<std::string> rel = pathInsideRoot(dir.string(), abs.string());
+    files.push_back({rel ? *rel : abs.generic_string(), abs.string()});
   };
   add(scene.sourceFile);
   for (const std::string& f : scene.referencedFiles) add(f);

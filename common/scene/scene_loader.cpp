@@ -6,6 +6,7 @@
 
 #include "common/scene/mitsuba_loader.h"
 #include "common/scene/pbrt_loader.h"
+#include "common/scene/scene_files.h"
 
 namespace mlt {
 
@@ -15,11 +16,14 @@ bool isPbrtScene(const std::string& path) {
   return ext == ".pbrt";
 }
 
-SceneDesc loadScene(const std::string& path, const std::map<std::string, std::string>& defines) {
-  if (!isPbrtScene(path)) return loadMitsubaScene(path, defines);
+SceneDesc loadScene(const std::string& path, const std::map<std::string, std::string>& defines,
+                    const std::string& root) {
+  if (!root.empty() && !pathInsideRoot(root, path))
+    throw SceneError(clipForMessage(path), 0, "the scene file lies outside the directory it is confined to");
+  if (!isPbrtScene(path)) return loadMitsubaScene(path, defines, root);
   if (!defines.empty())
-    throw SceneError(path, 0, "-D " + defines.begin()->first + "=...: parameters apply to Mitsuba scenes only");
-  return loadPbrtScene(path);
+    throw SceneError(path, 0, "-D " + clipForMessage(defines.begin()->first) + "=...: parameters apply to Mitsuba scenes only");
+  return loadPbrtScene(path, root);
 }
 
 }  // namespace mlt

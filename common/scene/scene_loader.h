@@ -12,6 +12,10 @@ namespace mlt {
 bool isPbrtScene(const std::string& path);
 
 // `defines` are Mitsuba's -D name=value parameters; a pbrt scene has none (a non-empty map is an error).
-SceneDesc loadScene(const std::string& path, const std::map<std::string, std::string>& defines = {});
+// `root`: when non-empty, the scene file and every file it reads must lie inside this directory
+// (common/scene/scene_files.h): a farm scene reads only its bundle. Otherwise a SceneError naming the
+// file, line and the offending name.
+SceneDesc loadScene(const std::string& path, const std::map<std::string, std::string>& defines = {},
+                    const std::string& root = {});
 
 }  // namespace mlt

@@ -3,6 +3,7 @@
 //   mltfarm status JOB --coordinator ADDR       mltfarm jobs --coordinator ADDR
 //   mltfarm watch JOB --coordinator ADDR        mltfarm cancel JOB --coordinator ADDR
 //   mltfarm fetch JOB -o OUT.exr [--png OUT.png] --coordinator ADDR
+//   mltfarm delete JOB --coordinator ADDR       (a finished, failed or cancelled job and its files)
 // --coordinator defaults to $MLTFARM_COORDINATOR, else 127.0.0.1:50051; the token comes from --token-file,
 // else $MLTFARM_TOKEN (never from argv).
 #include <fmt/format.h>
@@ -133,6 +134,12 @@ const CommandRegistration kWatch("watch", "Follow a job's progress until it ends
                                  jobCommand([](FarmClient& c, const JobOptions& o) { return watchToEnd(c, o.job); }));
 const CommandRegistration kCancel("cancel", "Cancel a job", jobCommand([](FarmClient& c, const JobOptions& o) {
                                     printStatus(c.cancel(o.job));
+                                    return 0;
+                                  }));
+const CommandRegistration kDelete("delete", "Delete a finished, failed or cancelled job and its files",
+                                  jobCommand([](FarmClient& c, const JobOptions& o) {
+                                    c.remove(o.job);
+                                    std::printf("%s deleted\n", o.job.c_str());
                                     return 0;
                                   }));
 const CommandRegistration kFetch("fetch", "Download a finished job's image",

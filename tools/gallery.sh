@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Renders the gallery of bundled scenes shown in the README: docs/gallery/<scene>.png, one per scene in
+# scenes/ (Mitsuba *.xml and pbrt-v3 *.pbrt), each with the method that suits it and a fixed seed, and
+# docs/gallery/README.md (what rendered each image, how long it took). Needs a build (BUILD=build).
+#   tools/gallery.sh        # ~5 minutes on 2 cores
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+OUT=docs/gallery
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+mkdir -p "$OUT"
+# scene file | method and work (chosen per scene: the method the results page ranks best there)
+SCENES=(
+  "cornell-box.xml|--method bdpt --spp 256"
+  "cornell-spheres.xml|--method bdpt --spp 256"
+  "door-ajar.xml|--method mmlt --mutations-per-pixel 512"
+  "glossy-plates.xml|--method bdpt --spp 128"
+  "caustic-mirror.xml|--method pssmlt --mutations-per-pixel 1024"
+  "textured-serialized.xml|--method bdpt --spp 128"
+  "checker-spheres.pbrt|--method bdpt --spp 128"
+  "furnace-sphere.xml|--method pt --spp 256"
+)
+{
+  echo "# Gallery of the bundled scenes"
+  echo
+  echo "Rendered by \`tools/gallery.sh\` on $(date -u +%Y-%m-%d), commit \`$(git rev-parse --short HEAD)\`, in-process,"
+  echo "$(nproc) threads, seed 1. Each image's EXR metadata (method, samples, b) is reproduced by the command shown."
+  echo
+  echo "| scene | command | seconds |"
+  echo "|---|---|---|"
+} > "$OUT/README.md"
+for entry in "${SCENES[@]}"; do
+  scene=${entry%%|*}
+  args=${entry#*|}
+  name=${scene%.*}
+  start=$(date +%s%N)
+  # shellcheck disable=SC2086
+  "$BUILD/tools/mltfarm" render "scenes/$scene" $args --seed 1 --in-process -q -o "$TMP/$name.exr"
+  ms=$(( ($(date +%s%N) - start) / 1000000 ))
+  secs=$((ms / 1000)).$(printf %03d $((ms % 1000)))
+  cp "$TMP/$name.png" "$OUT/$name.png"
+  printf '| %s | `mltfarm render scenes/%s %s --seed 1 --in-process` | %s |\n' "$scene" "$scene" "$args" "$secs" >> "$OUT/README.md"
+  echo "gallery: $name ($secs s)"
+done
