@@ -13,12 +13,14 @@ only reads the tables.
 """
 import argparse
 import csv
-import math
 import os
 import shutil
 import subprocess
 import sys
 from collections import OrderedDict, defaultdict
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from charts import mean_std  # noqa: E402  (the charts' mean and sample standard deviation)
 
 HARD_SCENES = ("caustic-mirror", "door-ajar", "glossy-plates")
 CHAIN_METHODS = ("pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt", "veach-mlt")
@@ -37,13 +39,6 @@ def write_csv(path, rows, fields):
         w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
-
-
-def mean_std(values):
-    n = len(values)
-    m = sum(values) / n
-    s = math.sqrt(sum((v - m) ** 2 for v in values) / (n - 1)) if n > 1 else 0.0
-    return m, s
 
 
 def fmt_e(x):
