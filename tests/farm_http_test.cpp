@@ -162,7 +162,7 @@ TEST(FarmHttp, JobJsonLivePreviewCancelAndFetch) {
 }
 
 TEST(FarmHttp, NonLoopbackAddressNeedsAToken) {
-  expectCoordinatorRefuses({"--http-listen", "0.0.0.0:0"}, "a non-loopback address needs --token");
+  expectCoordinatorRefuses({"--http-listen", "0.0.0.0:0"}, "a non-loopback address needs a token");
   EXPECT_TRUE(isLoopbackHost("127.0.0.1:80"));
   EXPECT_TRUE(isLoopbackHost("[::1]:80"));
   EXPECT_TRUE(isLoopbackHost("localhost:0"));

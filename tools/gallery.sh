@@ -2,7 +2,7 @@
 # Renders the gallery of bundled scenes shown in the README: docs/gallery/<scene>.png, one per scene in
 # scenes/ (Mitsuba *.xml and pbrt-v3 *.pbrt), each with the method that suits it and a fixed seed, and
 # docs/gallery/README.md (what rendered each image, how long it took). Needs a build (BUILD=build).
-#   tools/gallery.sh        # ~5 minutes on 2 cores
+#   tools/gallery.sh        # a few minutes on 2 cores
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -10,16 +10,16 @@ OUT=docs/gallery
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 mkdir -p "$OUT"
-# scene file | method and work (chosen per scene: the method the results page ranks best there)
+# scene file | method and work (per scene: the method docs/RESULTS.md ranks best there, or bdpt)
 SCENES=(
-  "cornell-box.xml|--method bdpt --spp 256"
-  "cornell-spheres.xml|--method bdpt --spp 256"
-  "door-ajar.xml|--method mmlt --mutations-per-pixel 512"
-  "glossy-plates.xml|--method bdpt --spp 128"
-  "caustic-mirror.xml|--method pssmlt --mutations-per-pixel 1024"
-  "textured-serialized.xml|--method bdpt --spp 128"
-  "checker-spheres.pbrt|--method bdpt --spp 128"
-  "furnace-sphere.xml|--method pt --spp 256"
+  "cornell-box.xml|--method bdpt --spp 64"
+  "cornell-spheres.xml|--method bdpt --spp 64"
+  "door-ajar.xml|--method mmlt --mutations-per-pixel 128"
+  "glossy-plates.xml|--method pt --spp 128"
+  "caustic-mirror.xml|--method mmlt --mutations-per-pixel 256"
+  "textured-serialized.xml|--method bdpt --spp 64"
+  "checker-spheres.pbrt|--method bdpt --spp 64"
+  "furnace-sphere.xml|--method pt --spp 64"
 )
 {
   echo "# Gallery of the bundled scenes"
