@@ -25,7 +25,8 @@ SCENES=(
   echo "# Gallery of the bundled scenes"
   echo
   echo "Rendered by \`tools/gallery.sh\` on $(date -u +%Y-%m-%d), commit \`$(git rev-parse --short HEAD)\`, in-process,"
-  echo "$(nproc) threads, seed 1. Each image's EXR metadata (method, samples, b) is reproduced by the command shown."
+  echo "$(nproc) threads, seed 1: the command shown reproduces each image exactly. Seconds: wall time on whatever"
+  echo "else the machine was doing (not a benchmark; docs/RESULTS.md has the timed comparisons)."
   echo
   echo "| scene | command | seconds |"
   echo "|---|---|---|"
