@@ -63,6 +63,11 @@ void ResultStore::put(int64_t job, uint32_t task, const PartialResult& result) c
   }
 }
 
+void ResultStore::remove(int64_t job, uint32_t task) const {
+  std::error_code ec;
+  fs::remove(path(job, task), ec);
+}
+
 std::vector<uint32_t> ResultStore::stored(int64_t job) const {
   std::vector<uint32_t> tasks;
   const fs::path dir = fs::path(dir_) / jobName(job) / "results";

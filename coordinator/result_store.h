@@ -28,6 +28,8 @@ class ResultStore {
   // (storage_error.h: RESOURCE_EXHAUSTED when the disk is full) or std::filesystem::filesystem_error.
   void put(int64_t job, uint32_t task, const PartialResult& result) const;
   std::vector<uint32_t> stored(int64_t job) const;  // ascending
+  // Deletes (job, task)'s result (a film stored for a job that stopped running before it was counted).
+  void remove(int64_t job, uint32_t task) const;
   // nullopt if the file is missing, torn or does not parse (the caller renders the task again).
   std::optional<PartialResult> load(int64_t job, uint32_t task, std::string* why = nullptr) const;
 

@@ -116,8 +116,14 @@ UploadReply Coordinator::upload(const std::string& workerId, const std::string& 
   std::lock_guard lock(mu_);
   Job& job = jobs_.at(id);
   // Still running and not accepted meanwhile: counted (the film came from the lease holder and passed the
-  // checks, even if its lease expired while it was being stored).
-  if (auto r = refused(job)) return *r;
+  // checks, even if its lease expired while it was being stored). A job that failed or was cancelled
+  // while the film was being stored does not keep it: a restart would count it (recovery reads the stored
+  // results), and the failed job's accepted tasks would change.
+  if (auto r = refused(job)) {
+    if (job.status.state != JobState::Running && job.taskState[taskIndex] != TaskState::Accepted)
+      results_->remove(id, taskIndex);
+    return *r;
+  }
   job.taskState[taskIndex] = TaskState::Accepted;
   metrics_.tasksAccepted.Increment();
   for (auto it = leases_.begin(); it != leases_.end();)
