@@ -11,6 +11,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "coordinator/auth.h"
 #include "coordinator/coordinator.h"
 #include "coordinator/http_json.h"
 #include "coordinator/web_assets.h"
@@ -19,13 +20,6 @@ namespace mlt::farm {
 namespace {
 
 using nlohmann::json;
-
-// Constant-time in the token's content: every byte is compared whatever the first difference.
-bool sameToken(const std::string& given, const std::string& token) {
-  unsigned char diff = given.size() == token.size() ? 0 : 1;
-  for (size_t i = 0; i < given.size(); ++i) diff |= uint8_t(given[i]) ^ uint8_t(token[i % std::max<size_t>(1, token.size())]);
-  return diff == 0;
-}
 
 void sendJson(httplib::Response& res, int status, const json& body) {
   res.status = status;
@@ -87,7 +81,7 @@ struct HttpServer::Routes {
   bool authorized(const httplib::Request& req, httplib::Response& res) {
     if (opt.token.empty()) return true;
     const std::string h = req.get_header_value("Authorization");
-    if (h.rfind("Bearer ", 0) == 0 && sameToken(h.substr(7), opt.token)) return true;
+    if (h.rfind("Bearer ", 0) == 0 && constantTimeEquals(std::string_view(h).substr(7), opt.token)) return true;
     res.set_header("WWW-Authenticate", "Bearer");
     sendJson(res, 401, {{"error", "missing or wrong token (Authorization: Bearer ...)"}});
     return false;
