@@ -2,6 +2,8 @@
 // pixel, row-major, as tests/golden_images_test.cpp hashes them) and its metadata keys; given two files,
 // exits 0 only if their pixels are bit-identical (the metadata may differ: a farm job id, a wall time).
 // Used by tests/bench/farm_overhead.sh to check that the farm and --in-process rendered the same image.
+// Given one file, it also prints the image's mean r, g, b and luminance and every numeric metadata value
+// (b, bStdErr, bBootstrap, ...): how a brightness question is answered without a Python EXR module.
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -34,6 +36,20 @@ int main(int argc, char** argv) {
       digests[i - 1] = pixelDigest(img);
       std::printf("%s: %dx%d pixels sha256 %s, %zu metadata keys\n", argv[i], img.width, img.height,
                   digests[i - 1].c_str(), img.metadata.numbers.size() + img.metadata.strings.size());
+    }
+    if (argc == 2) {
+      const mlt::ExrImage img = mlt::readExr(argv[1]);
+      double sum[3] = {0, 0, 0};
+      for (const mlt::Color& c : img.rgb) {
+        sum[0] += c.r;
+        sum[1] += c.g;
+        sum[2] += c.b;
+      }
+      const double n = img.rgb.empty() ? 1.0 : double(img.rgb.size());
+      const double r = sum[0] / n, g = sum[1] / n, b = sum[2] / n;
+      std::printf("mean r %.9g g %.9g b %.9g luminance %.9g\n", r, g, b,
+                  0.212671 * r + 0.715160 * g + 0.072169 * b);
+      for (const auto& [key, value] : img.metadata.numbers) std::printf("  %s = %.9g\n", key.c_str(), value);
     }
     if (argc == 3) {
       const bool same = digests[0] == digests[1];
