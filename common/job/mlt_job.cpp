@@ -75,7 +75,7 @@ uint64_t bootstrapPerLengthFor(const ChainJobSpec& spec, const RenderSettings& s
 
 uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   const double M = s.mutationsPerPixel * double(s.width) * double(s.height);
-  return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M : 0.0);
+  return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost() : 0.0);
 }
 
 uint32_t allocationBin(Vec2 pRaster, int width, int height) {
@@ -330,9 +330,10 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     }
     plan.settings.samplesPerUnit = d.settings.samplesPerUnit;
   }
-  spdlog::info("{}: bootstrap b = {:.6g} +- {:.3g} ({} candidates, {:.3f} s; refined by the chains' large steps), {} "
+  spdlog::info("{}: bootstrap b = {:.6g} +- {:.3g} ({} candidates, {:.3f} s; {}), {} "
                "chains, {} mutations ({} per pixel){}",
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
+               spec.refinesB() ? "refined by the chains' large steps" : "the chains make no large steps: b is the bootstrap's",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
                s.separateDirect ? ", direct light by bdpt" : "");
   return plan;

@@ -43,6 +43,14 @@ class ChainJobSpec {
     return makeState(source, settings);
   }
   virtual std::vector<std::string> mutationKinds() const = 0;
+  // What one bootstrap candidate costs in the chain's mutations. The automatic bootstrap size is
+  // kBootstrapShare of the mutations' time, so a count-sized bootstrap (--mutations-per-pixel) holds
+  // kBootstrapShare * M / candidateCost candidates, as a --time budget sizes it by measured throughput.
+  // 1: a candidate is one evaluation of the chain's own target (pssmlt, pssmlt-bdpt, mmlt, rjmlt).
+  virtual double candidateCost() const { return 1.0; }
+  // Whether the chains make large steps, independent proposals whose c refines b as the job runs
+  // (develop.h (D3)-(D5)); without them b is the bootstrap's alone.
+  virtual bool refinesB() const { return true; }
 };
 
 // The shortest path length a per-length method's chains cover: 1, or kDirectMaxSegments + 1 when the
@@ -64,7 +72,7 @@ struct MarkovChainBootstrap {
 // first estimate of b, which every large step of every chain then refines (mlt/develop.h (D3)-(D5)).
 // Its candidates spread their film positions evenly (sample_source.h), which makes one candidate worth
 // ~30 large steps for b on a scene with a visible light: so it gets kBootstrapShare of the mutations (a
-// candidate costs about what a mutation costs), spread evenly over the path lengths and rounded down to
+// candidate costs about what a mutation costs; ChainJobSpec::candidateCost otherwise), spread evenly over the path lengths and rounded down to
 // a multiple of 64, at least kMinBootstrapPerLength per length (a length whose candidates all miss gets no
 // chains) and at most kMaxBootstrapPerLength. With several lengths (mmlt) that is the average: each
 // starts with a quarter and the rest goes, by doublings, to the lengths whose b_k is least certain per

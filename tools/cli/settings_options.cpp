@@ -43,7 +43,7 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       ->check(CLI::PositiveNumber);
   add_option("--chains", chains_, "Markov chain methods: number of chains (0 = automatic)")
       ->check(CLI::NonNegativeNumber);
-  add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (at most 4% of the mutations or of the time budget; b is refined by the chains' large steps)")
+  add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 4% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   add_option("--large-step", largeStep_, "Markov chain methods: large-step probability")

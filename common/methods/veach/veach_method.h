@@ -35,6 +35,11 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   bool allowsSeparateDirect() const override { return false; }
   std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
+  // A candidate is a bdpt sample (every strategy): measured at 2.7-5.0x a veach-mlt mutation on the bundled
+  // scenes (docs/RESULTS.md's throughput columns, bdpt samples/s against veach-mlt mutations/s; 4.1x on
+  // average); without this the count-sized bootstrap took 13-25% of the job there.
+  double candidateCost() const override { return 4.0; }
+  bool refinesB() const override { return false; }  // b is the bootstrap's (veach_job.h)
 
   // The mutation settings from the params (defaults where unset).
   veach::MutationSettings mutationSettings(const RenderSettings& settings) const;
