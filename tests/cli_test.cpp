@@ -153,6 +153,16 @@ TEST_F(Cli, RenderWritesExrWithMetadataAndPngAndIsThreadCountIndependent) {
   EXPECT_GT(sum, 0.0);  // the light reaches the camera
 }
 
+// The summary line of a sample method names it (it once passed the method's std::string to printf's %s,
+// which printed bytes of the string object).
+TEST_F(Cli, SampleRenderSummaryNamesTheMethodAndItsSamples) {
+  const fs::path out = tempDir() / "summary_pt.exr";
+  const RunResult r = run("render " + kScenes + "cornell-box.xml --method pt --spp 2 --width 16 --height 16 "
+                          "--threads 1 --in-process -o " + out.string());
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("pt: 512 samples in "), std::string::npos) << r.output;
+}
+
 bool sameBits(const ExrImage& a, const ExrImage& b) {
   if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return false;
   for (size_t i = 0; i < a.rgb.size(); ++i)

@@ -1,6 +1,7 @@
 // exr_pixels A.exr [B.exr]: prints an EXR's size, the SHA-256 of its pixels (the float bytes r, g, b per
 // pixel, row-major, as tests/golden_images_test.cpp hashes them) and its metadata keys; given two files,
-// exits 0 only if their pixels are bit-identical (the metadata may differ: a farm job id, a wall time).
+// exits 0 only if their pixels are bit-identical (the metadata may differ: a farm job id, a wall time);
+// if they differ, it prints A's relMSE and brightness error against B as the evaluation harness computes them.
 // Used by tests/bench/farm_overhead.sh to check that the farm and --in-process rendered the same image.
 // Given one file, it also prints the image's mean r, g, b and luminance and every numeric metadata value
 // (b, bStdErr, bBootstrap, ...): how a brightness question is answered without a Python EXR module.
@@ -54,6 +55,21 @@ int main(int argc, char** argv) {
     if (argc == 3) {
       const bool same = digests[0] == digests[1];
       std::printf("pixels %s\n", same ? "identical" : "DIFFER");
+      const mlt::ExrImage a = mlt::readExr(argv[1]), r = mlt::readExr(argv[2]);
+      if (!same && a.rgb.size() == r.rgb.size() && !a.rgb.empty()) {
+        // The evaluation harness's metric (tools/eval/metrics.h), B taken as the reference.
+        double rel = 0, meanA = 0, meanR = 0;
+        for (size_t i = 0; i < a.rgb.size(); ++i) {
+          const float x[3] = {a.rgb[i].r, a.rgb[i].g, a.rgb[i].b}, y[3] = {r.rgb[i].r, r.rgb[i].g, r.rgb[i].b};
+          for (int c = 0; c < 3; ++c) {
+            rel += (double(x[c]) - y[c]) * (double(x[c]) - y[c]) / (double(y[c]) * y[c] + 0.01);
+            meanA += x[c];
+            meanR += y[c];
+          }
+        }
+        std::printf("relMSE %.6g brightness %+.4f%%\n", rel / (3.0 * double(a.rgb.size())),
+                    100 * (meanA / meanR - 1));
+      }
       return same ? 0 : 1;
     }
     return 0;

@@ -307,12 +307,10 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
                              plan.settings.bootstrapSamples);
     std::fputs(summary.c_str(), stderr);
   } else if (progress) {
-    char line[512];
-    std::snprintf(line, sizeof line, "%s: %llu samples in %.2f s (%.3g samples/s), %zu/%zu work units%s",
-                  plan.settings.method, (unsigned long long)result.merged.samples, result.seconds,
-                  double(result.merged.samples) / std::max(result.seconds, 1e-9), merged, nUnits,
-                  nonFiniteNote.c_str());
-    progress->finish(line);
+    progress->finish(fmt::format("{}: {} samples in {:.2f} s ({:.3g} samples/s), {}/{} work units{}",
+                                 plan.settings.method, result.merged.samples, result.seconds,
+                                 double(result.merged.samples) / std::max(result.seconds, 1e-9), merged, nUnits,
+                                 nonFiniteNote));
   }
   if (report) std::fputs(chainWarnings(*report).c_str(), stderr);
   return result;
