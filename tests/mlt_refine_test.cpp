@@ -68,16 +68,25 @@ TEST(RefinedB, PooledEstimateIsTheMeanAndStandardErrorOfAllSamples) {
   EXPECT_EQ(pooledB({}, {}).b, 0.0);
 }
 
-TEST(RefinedB, CombinationWeighsByInverseVarianceFromTheBootstrapsModel) {
+TEST(RefinedB, CombinationWeighsByTheBootstrapsModelAndReportsTheLargerError) {
   const BootstrapEstimate boot{1000, 2.0, 0.1, 40.0};  // sampleVar 40: a large step's variance
   TargetSums large;
   large.n = 4000;
   large.sum = 4000 * 2.3;
-  large.sumSq = 1e9;  // the large steps' own spread never enters the weights
+  large.sumSq = 4000 * (2.3 * 2.3 + 20.0);  // their own spread (variance ~20) is below the model's 40
   const BEstimate e = combineB(boot, large);
   const double v0 = 0.01, vL = 40.0 / 4000;  // equal variances: equal weights
   EXPECT_NEAR(e.b, 0.5 * 2.0 + 0.5 * 2.3, 1e-12);
   EXPECT_NEAR(e.stdErr, std::sqrt(v0 * vL / (v0 + vL)), 1e-12);
+  // A heavy tail the bootstrap missed: the large steps' spread (variance ~400) never enters the weights, but
+  // it does enter the standard error: w0^2 v0 + (1 - w0)^2 S2 / n_L.
+  TargetSums tail = large;
+  tail.sumSq = 4000 * (2.3 * 2.3 + 400.0);
+  const BEstimate t = combineB(boot, tail);
+  EXPECT_EQ(t.b, e.b);
+  const double s2 = (tail.sumSq - 4000 * 2.3 * 2.3) / 3999 / 4000;
+  EXPECT_NEAR(t.stdErr, std::sqrt(0.25 * v0 + 0.25 * s2), 1e-12);
+  EXPECT_GT(t.stdErr, 2 * e.stdErr);
   EXPECT_EQ(e.samples, 5000u);
   EXPECT_EQ(combineB(boot, {}).b, 2.0);  // no large steps yet: the bootstrap's
   EXPECT_EQ(combineB({1000, 1.0, 0.0, 0.0}, large).b, (1000 * 1.0 + 4000 * 2.3) / 5000);  // both exact: by count

@@ -56,17 +56,28 @@ struct BootstrapEstimate {
 };
 
 // (D5): the bootstrap's b and the large steps' mean, weighted by inverse variance. The large steps' variance
-// is the model sampleVar / n_L, computed from the bootstrap, never from the large steps themselves:
-// weights that depend on the values they weight would bias a heavy-tailed c low.
+// in the weights is the model sampleVar / n_L, computed from the bootstrap, never from the large steps
+// themselves: weights that depend on the values they weight would bias a heavy-tailed c low.
+// The standard error reported is Var(w0 b0 + (1 - w0) bL) = w0^2 v0 + (1 - w0)^2 Var(bL), with Var(bL) the
+// larger of the model and the large steps' own spread S2 / n_L: a heavy tail the bootstrap never saw (its
+// model, hence the weights, too small) shows in the large steps that did see it, and the error then says
+// so (caustic-mirror: rare s = 0 paths through the mirror, docs/CHAINS.md). With the model the larger,
+// this is the inverse-variance formula sqrt(v0 vL / (v0 + vL)).
 inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large) {
   if (large.n == 0) return {boot.b, boot.stdErr, boot.n};
   const double bL = large.sum / double(large.n);
   if (boot.n == 0) return pooledB({}, large);
   const double v0 = boot.stdErr * boot.stdErr, vL = boot.sampleVar / double(large.n);
   const uint64_t n = boot.n + large.n;
-  if (!(v0 + vL > 0)) return {(boot.b * double(boot.n) + bL * double(large.n)) / double(n), 0.0, n};
+  const double nL = double(large.n);
+  const double spread = large.n > 1 ? std::max(0.0, (large.sumSq - nL * bL * bL) / (nL - 1)) / nL : 0.0;
+  if (!(v0 + vL > 0)) {
+    const double wL = nL / double(n);  // both exact by the model: by count
+    return {(1 - wL) * boot.b + wL * bL, wL * std::sqrt(spread), n};
+  }
   const double w0 = vL / (v0 + vL);  // the bootstrap's weight
-  return {w0 * boot.b + (1 - w0) * bL, std::sqrt(v0 * vL / (v0 + vL)), n};
+  const double varL = std::max(vL, spread);
+  return {w0 * boot.b + (1 - w0) * bL, std::sqrt(w0 * w0 * v0 + (1 - w0) * (1 - w0) * varL), n};
 }
 
 // Element-wise sum of per-slot sums (the shorter side counts as zero).
