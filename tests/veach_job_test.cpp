@@ -9,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "common/job/mlt_job.h"
 #include "common/methods/image_metadata.h"
 #include "common/methods/registry.h"
 #include "common/methods/veach/veach_chain.h"
@@ -150,6 +151,38 @@ TEST(VeachJob, RegisteredAsVeachMlt) {
   EXPECT_EQ(r.stats.proposedPerKind[veach::kBidir], onlyBidir.units[0].mutations);
   s.params["veach-bidir"] = "0";
   EXPECT_THROW(planJob(*scene, s), std::invalid_argument);  // not ergodic
+}
+
+// b is refined as the chains run: each chain evaluates veachBSamples(mutations) independent bootstrap
+// candidates (a stream of its own) into largeStepSums, which develop combines with the bootstrap's b; their
+// mean agrees with the bootstrap's within the errors, and b's standard error falls as the job grows.
+TEST(VeachJob, ChainsRefineBWithIndependentCandidates) {
+  const auto scene = RenderScene::build(test::smallCornellBox(16, 16));
+  RenderSettings s = smallSettings();
+  s.method = "veach-mlt";
+  double lastStdErr = 0;
+  for (double mpp : {16.0, 1024.0}) {
+    s.mutationsPerPixel = mpp;
+    const JobPlan plan = planJob(*scene, s);
+    PartialResult merged;
+    for (const WorkUnit& u : plan.units) {
+      const PartialResult r = runWorkUnit(*scene, plan, u);
+      ASSERT_EQ(r.stats.largeStepSums.size(), 1u);
+      EXPECT_EQ(r.stats.largeStepSums[0].n, veach::veachBSamples(u.mutations)) << "chain " << u.index;
+      merged.add(r);
+    }
+    const TargetSums& large = merged.stats.largeStepSums[0];
+    const double bL = large.sum / double(large.n);
+    const double seL = std::sqrt(plan.norm.bootstrapB[0].sampleVar / double(large.n));
+    EXPECT_NEAR(bL, plan.norm.b, 4 * std::hypot(seL, plan.norm.bStdErr)) << mpp;
+    const RefinedB b = refinedB(plan.norm, merged.stats);
+    EXPECT_EQ(b.total.samples, plan.norm.bootstrapSamples + large.n);
+    if (lastStdErr > 0) {  // 64x the job, the same bootstrap: tighter than before and than the bootstrap alone
+      EXPECT_LT(b.total.stdErr, lastStdErr);
+      EXPECT_LT(b.total.stdErr, plan.norm.bStdErr);
+    }
+    lastStdErr = b.total.stdErr;
+  }
 }
 
 TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {

@@ -333,7 +333,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   spdlog::info("{}: bootstrap b = {:.6g} +- {:.3g} ({} candidates, {:.3f} s; {}), {} "
                "chains, {} mutations ({} per pixel){}",
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
-               spec.refinesB() ? "refined by the chains' large steps" : "the chains make no large steps: b is the bootstrap's",
+               "refined as the chains run",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
                s.separateDirect ? ", direct light by bdpt" : "");
   return plan;

@@ -48,9 +48,6 @@ class ChainJobSpec {
   // kBootstrapShare * M / candidateCost candidates, as a --time budget sizes it by measured throughput.
   // 1: a candidate is one evaluation of the chain's own target (pssmlt, pssmlt-bdpt, mmlt, rjmlt).
   virtual double candidateCost() const { return 1.0; }
-  // Whether the chains make large steps, independent proposals whose c refines b as the job runs
-  // (develop.h (D3)-(D5)); without them b is the bootstrap's alone.
-  virtual bool refinesB() const { return true; }
 };
 
 // The shortest path length a per-length method's chains cover: 1, or kDirectMaxSegments + 1 when the

@@ -205,7 +205,10 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
   std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.3f}%, from {} samples: {} bootstrap candidates", r.b,
                                 r.bStdErr, 100 * r.relativeStdErr(), r.bSamples, r.bootstrapSamples);
   out += bootstrapSeconds >= 0 ? fmt::format(" in {:.2f} s", bootstrapSeconds) : "";
-  out += r.bSamples > r.bootstrapSamples ? " + the chains' large steps)\n" : "; the chains make no large steps)\n";
+  if (r.bSamples <= r.bootstrapSamples)
+    out += "; none from the chains)\n";
+  else
+    out += r.steps("large") > 0 ? " + the chains' large steps)\n" : " + the chains' independent samples)\n";
   if (!r.lengths.empty()) {
     out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}\n", "k", "b_k ± SE", "chains", "mutations", "acceptance");
     for (const ChainLengthReport& l : r.lengths)
@@ -227,12 +230,13 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
 
 std::string chainWarnings(const ChainReport& r) {
   if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
+  const bool largeSteps = r.steps("large") > 0;
   const std::string remedy =
       r.bSamples > r.bootstrapSamples
-          ? fmt::format("render more mutations (b is refined by every large step: now {} samples) or raise --large-step",
-                        r.bSamples)
-          : fmt::format("this method's chains make no large steps, so b is the bootstrap's {} samples: render more "
-                        "mutations (the automatic bootstrap grows with them) or set a larger --bootstrap",
+          ? fmt::format("render more mutations (b is refined as the chains run: now {} samples){}", r.bSamples,
+                        largeSteps ? " or raise --large-step" : "")
+          : fmt::format("no chain refined b, so it is the bootstrap's {} samples: render more mutations or set a "
+                        "larger --bootstrap",
                         r.bootstrapSamples);
   return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
                      "as uncertain: {}\n",

@@ -23,6 +23,13 @@ namespace mlt::veach {
 namespace {
 constexpr double kReplayTolerance = 1e-5;  // as mlt_job.cpp: the same code on the same numbers
 constexpr int kStartTries = 16;            // a start strategy whose path evaluates to f = 0 is redrawn
+// b refined as the job runs (develop.h (D3)-(D5)). Path-space chains make no large steps, so each chain also
+// evaluates one independent bootstrap candidate (a bdpt sample: c(u) = lum of its MIS-weighted strategies,
+// whose mean is b) per kMutationsPerBSample mutations, from a stream of its own (never the plan's
+// candidates), and keeps their sums where the other methods keep their large steps' (largeStepSums), merged
+// and quantized alike. A candidate costs ~4-6 mutations (VeachMltMethod::candidateCost), so this is ~8% of
+// the chain's time; it lets the bootstrap stay at kBootstrapShare of the job and b still tighten with it.
+constexpr uint64_t kMutationsPerBSample = 64;
 // The bootstrap chose a candidate whose every strategy rebuilds to a path with f = 0 in path space (seen
 // on door-ajar at 256x256: about one chain in 10^3, a connection through the door's gap that the path
 // evaluator's geometry rejects). Such a path is not a state of this chain, so it cannot start one. The
@@ -108,6 +115,18 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
 
+  TargetSums bSamples;  // see kMutationsPerBSample
+  {
+    static const VeachMltMethod method;
+    const std::unique_ptr<PssTarget> candidate = method.makeTarget(scene, s);
+    const uint64_t streamSeed = hashKeys(s.seed, uint64_t(unit.index), 0xb5a3b1e5ULL);
+    for (uint64_t i = 0, n = veachBSamples(unit.mutations); i < n; ++i) {
+      IndependentSource source = IndependentSource::candidate(streamSeed, i);
+      candidate->evaluate(source, -1, scratch);
+      bSamples.add(targetFunction(scratch));
+    }
+  }
+
   quantizeFilm(result.film, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
@@ -119,10 +138,13 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     st.proposedPerLength[0] += counts.proposed[k];
     st.acceptedPerLength[0] += counts.accepted[k];
   }
-  st.largeStepSums.assign(1, TargetSums{});
+  st.largeStepSums.assign(1, bSamples);
+  quantizeSums(st.largeStepSums[0], s.seed, unit.index, 0);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
+
+uint64_t veachBSamples(uint64_t mutations) { return (mutations + kMutationsPerBSample - 1) / kMutationsPerBSample; }
 
 std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged) {
   return developMarkovChainImage(plan, merged);

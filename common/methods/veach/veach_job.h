@@ -11,8 +11,10 @@
 // unit.mutations steps of runChain with expected-value splatting into layer chainLayer(0); everything
 // random is a pure function of (job seed, chain index): chainRng purposes 3 (start strategy) and 4
 // (mutations), 1 (acceptance) as for every chain.
-// Develop: (D1) of common/mlt/develop.h, b * P / M (the chains make no large steps, so b is the
-// bootstrap's).
+// b: the bootstrap's, refined as the chains run by independent bootstrap candidates the chains evaluate
+// beside their mutations (veachBSamples of them per chain; chainRng-independent stream of their own),
+// kept in largeStepSums as the other methods keep their large steps' (develop.h (D3)-(D5)).
+// Develop: (D1) of common/mlt/develop.h, b * P / M with that b.
 // Not supported yet: separateDirect (throws), Kelemen MIS splatting (ignored: expected values).
 #pragma once
 #include <string>
@@ -32,6 +34,8 @@ JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings);
 PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,
                             const MutationSettings& mutations);
 std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged);
+// Independent samples of b a chain of `mutations` mutations evaluates (one per 64 mutations, rounded up).
+uint64_t veachBSamples(uint64_t mutations);
 
 // Per-mutation acceptance for logs and metadata: "bidir 0.412 (123/456), lens ..." over the merged stats.
 std::string acceptanceSummary(const ChainStats& stats);

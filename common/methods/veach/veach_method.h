@@ -39,7 +39,6 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   // scenes (docs/RESULTS.md's throughput columns, bdpt samples/s against veach-mlt mutations/s; 4.1x on
   // average); without this the count-sized bootstrap took 13-25% of the job there.
   double candidateCost() const override { return 4.0; }
-  bool refinesB() const override { return false; }  // b is the bootstrap's (veach_job.h)
 
   // The mutation settings from the params (defaults where unset).
   veach::MutationSettings mutationSettings(const RenderSettings& settings) const;
