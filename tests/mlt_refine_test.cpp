@@ -264,24 +264,27 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   EXPECT_EQ(plan.norm.bootstrapSamples, kMinBootstrapPerLength);
 }
 
-// A bootstrap candidate of veach-mlt is a whole bdpt sample, about 4 of its mutations: the count-sized
-// bootstrap holds a quarter of the candidates pssmlt-bdpt's holds at the same settings (the same share of
+// A bootstrap candidate of veach-mlt is a whole bdpt sample, 3-6 of its mutations: the count-sized
+// bootstrap holds 1 / candidateCost of the candidates pssmlt-bdpt's holds at the same settings (the same share of
 // the job's time; the results page measured veach-mlt's bootstrap at 13-25% of the job before this).
 TEST(BootstrapSize, CandidatesAreSizedByTheirCostInMutations) {
   const ChainJobSpec* veach = findChainJobSpec("veach-mlt");
   const ChainJobSpec* pss = findChainJobSpec("pssmlt-bdpt");
   ASSERT_TRUE(veach && pss);
-  EXPECT_EQ(pss->candidateCost(), 1.0);
-  EXPECT_GT(veach->candidateCost(), 1.0);
   RenderSettings s = settingsFor("pssmlt-bdpt", 1, 256);  // below kMaxBootstrapPerLength
+  EXPECT_EQ(pss->candidateCost(s), 1.0);
+  EXPECT_GT(veach->candidateCost(s), 1.0);
+  RenderSettings deep = s;
+  deep.integrator.maxDepth = 12;
+  EXPECT_GT(veach->candidateCost(deep), veach->candidateCost(s));  // a bdpt sample grows faster with depth
   s.bootstrapSamples = 0;
   s.width = 256;
   s.height = 256;
   const uint64_t nPss = bootstrapPerLength(*pss, s);
   s.method = "veach-mlt";
   const uint64_t nVeach = bootstrapPerLength(*veach, s);
-  EXPECT_LE(double(nVeach), kBootstrapShare * 256.0 * 256 * 256 / veach->candidateCost());
-  EXPECT_NEAR(double(nVeach) * veach->candidateCost(), double(nPss), 64 * veach->candidateCost());
+  EXPECT_LE(double(nVeach), kBootstrapShare * 256.0 * 256 * 256 / veach->candidateCost(s));
+  EXPECT_NEAR(double(nVeach) * veach->candidateCost(s), double(nPss), 64 * veach->candidateCost(s));
 }
 
 // What a vague b's warning and the summary say depends on where b's samples came from: large steps (a

@@ -75,7 +75,7 @@ uint64_t bootstrapPerLengthFor(const ChainJobSpec& spec, const RenderSettings& s
 
 uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   const double M = s.mutationsPerPixel * double(s.width) * double(s.height);
-  return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost() : 0.0);
+  return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost(s) : 0.0);
 }
 
 uint32_t allocationBin(Vec2 pRaster, int width, int height) {

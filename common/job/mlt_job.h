@@ -47,7 +47,10 @@ class ChainJobSpec {
   // kBootstrapShare of the mutations' time, so a count-sized bootstrap (--mutations-per-pixel) holds
   // kBootstrapShare * M / candidateCost candidates, as a --time budget sizes it by measured throughput.
   // 1: a candidate is one evaluation of the chain's own target (pssmlt, pssmlt-bdpt, mmlt, rjmlt).
-  virtual double candidateCost() const { return 1.0; }
+  virtual double candidateCost(const RenderSettings& settings) const {
+    (void)settings;
+    return 1.0;
+  }
 };
 
 // The shortest path length a per-length method's chains cover: 1, or kDirectMaxSegments + 1 when the

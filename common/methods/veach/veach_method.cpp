@@ -1,5 +1,7 @@
 #include "common/methods/veach/veach_method.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -73,6 +75,11 @@ std::vector<Color> VeachMltMethod::develop(const JobPlan& plan, const PartialRes
 
 void VeachMltMethod::addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& m) const {
   addChainMetadata(makeChainReport(plan, merged), m);  // b, acceptance per mutation kind (mutationKinds())
+}
+
+double VeachMltMethod::candidateCost(const RenderSettings& settings) const {
+  const int depth = settings.integrator.maxDepth;
+  return depth < 0 ? 8.0 : std::clamp(2.0 + double(depth) / 3.0, 2.0, 8.0);
 }
 
 std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {

@@ -35,10 +35,12 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   bool allowsSeparateDirect() const override { return false; }
   std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
-  // A candidate is a bdpt sample (every strategy): measured at 2.7-5.0x a veach-mlt mutation on the bundled
-  // scenes (docs/RESULTS.md's throughput columns, bdpt samples/s against veach-mlt mutations/s; 4.1x on
-  // average); without this the count-sized bootstrap took 13-25% of the job there.
-  double candidateCost() const override { return 4.0; }
+  // A candidate is a bdpt sample (every strategy, ~depth^2 connections) against a mutation that retraces a
+  // part of one path (~depth): measured (docs/RESULTS.md's throughput columns, bdpt samples/s against
+  // veach-mlt mutations/s) 2.9x and 4.6x at max depth 5 (glossy-plates, cornell-box), 5.8x and 6.2x at 12
+  // (caustic-mirror, door-ajar); the count-sized bootstrap took 13-25% of the job there before this.
+  // Modelled as 2 + depth / 3 (3.7 at 5, 6 at 12), at most 8 (also for unlimited depth).
+  double candidateCost(const RenderSettings& settings) const override;
 
   // The mutation settings from the params (defaults where unset).
   veach::MutationSettings mutationSettings(const RenderSettings& settings) const;
