@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <spdlog/spdlog.h>
@@ -336,6 +337,26 @@ TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
   int accRows = -1;
   while (std::getline(acc, line)) ++accRows;
   EXPECT_GT(accRows, 0);
+  // Per mutation kind: every pssmlt run has its large and small steps, summing to the run's mutations.
+  std::ifstream kinds(out + "/kinds.csv");
+  std::getline(kinds, line);
+  EXPECT_EQ(line, "scene,method,mode,budget_index,budget,run,kind,proposed,accepted");
+  std::map<std::string, int> kindRows;
+  std::map<int, uint64_t> proposedPerRun;  // key: budget index * 100 + run
+  while (std::getline(kinds, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    ASSERT_EQ(f.size(), 9u) << line;
+    EXPECT_EQ(f[1], "pssmlt") << line;
+    ++kindRows[f[6]];
+    EXPECT_LE(std::stoull(f[8]), std::stoull(f[7])) << line;
+    proposedPerRun[std::stoi(f[3]) * 100 + std::stoi(f[5])] += std::stoull(f[7]);
+  }
+  EXPECT_EQ(kindRows["large"], 2 * 5);  // 2 budgets x 5 runs
+  EXPECT_EQ(kindRows["small"], 2 * 5);
+  for (const RunRecord& r : result.runs)
+    if (r.method == "pssmlt") EXPECT_EQ(proposedPerRun[r.budgetIndex * 100 + r.run], r.samples) << r.run;
   std::ifstream summaryFile(out + "/summary.md");
   std::stringstream summary;
   summary << summaryFile.rdbuf();

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks tools/eval/results_page.py on synthetic `mltfarm eval` outputs: two calls (every method at 4 and
 16 s; two methods at 64 s) are pooled with budget indices renumbered by value, and the page's target
-checks follow the numbers (a method that misses the brightness target is marked "no", the mmlt/bdpt ratio
+checks follow the numbers, acceptance per mutation kind is pooled over runs (a method that misses the brightness target is marked "no", the mmlt/bdpt ratio
 is the ratio of the means, the hard-scene ratio picks the best chain method)."""
 import csv
 import os
@@ -51,6 +51,12 @@ def main():
         long_.append(run_row("cornell-box", "bdpt", 0, 64, run, 2.5e-4, 0.0))
         long_.append(run_row("cornell-box", "mmlt", 0, 64, run, 3e-4, 0.0, plan=1.0))
     write_eval_dir(os.path.join(tmp, "a-short"), short, ["cornell-box", "caustic-mirror"])
+    # Mutation kinds of the caustic-mirror mmlt runs at 16 s: large 10 of 100 accepted, small 300 of 600.
+    with open(os.path.join(tmp, "a-short", "kinds.csv"), "w") as f:
+        f.write("scene,method,mode,budget_index,budget,run,kind,proposed,accepted\n")
+        for run in range(3):
+            f.write("caustic-mirror,mmlt,local,1,16,%d,large,100,10\n" % run)
+            f.write("caustic-mirror,mmlt,local,1,16,%d,small,600,300\n" % run)
     write_eval_dir(os.path.join(tmp, "a-long"), long_, ["cornell-box"])
     out, page = os.path.join(tmp, "pooled"), os.path.join(tmp, "PAGE.md")
     subprocess.run([sys.executable, SCRIPT, "--out", out, "--page", page, os.path.join(tmp, "a-short"),
@@ -70,6 +76,10 @@ def main():
     assert "largest 6.0% (caustic-mirror, mmlt" in text, text
     assert "**Pick here:** `pssmlt` (lowest relMSE at 16 s" in text, text
     assert "**Pick here:** `bdpt` (lowest relMSE at 16 s" in text, text  # cornell-box
+    # Acceptance per kind, pooled over the runs: 30/300 large, 900/1800 small; shares 1/7 and 6/7.
+    assert "| mmlt | large 0.100 (14%), small 0.500 (86%) |" in text, text
+    with open(os.path.join(out, "kinds.csv"), newline="") as f:
+        assert len(list(csv.DictReader(f))) == 6
     for png in ("error_time_cornell-box.png", "spread_caustic-mirror.png"):
         assert os.path.exists(os.path.join(out, png)), png
     print("results_page_test: ok")

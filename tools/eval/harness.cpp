@@ -225,6 +225,9 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
       if (rec.markovChain) {
         rec.proposedPerLength = out.stats.proposedPerLength;
         rec.acceptedPerLength = out.stats.acceptedPerLength;
+        rec.kinds = findMethod(ms.method).mutationKinds();
+        rec.proposedPerKind = out.stats.proposedPerKind;
+        rec.acceptedPerKind = out.stats.acceptedPerKind;
         auto [p, a] = proposedAccepted(out.stats);
         rec.acceptance = p > 0 ? double(a) / double(p) : -1;  // -1: not reported (farm runs)
         rec.chains = out.chains;
@@ -269,6 +272,10 @@ void writeEvalOutputs(const EvalConfig& cfg, EvalResult& result) {
   {
     auto os = open("acceptance.csv");
     writeAcceptanceCsv(os, result.runs);
+  }
+  {
+    auto os = open("kinds.csv");
+    writeKindsCsv(os, result.runs);
   }
   {
     auto os = open("refs.csv");

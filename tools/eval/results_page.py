@@ -4,11 +4,11 @@
 usage: /usr/bin/python3 tools/eval/results_page.py --out DIR --page PAGE.md [--header FILE] EVALDIR...
 
 Each EVALDIR holds what one `mltfarm eval` call wrote (runs.csv, acceptance.csv, refs.csv,
-calibration.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
+calibration.csv, kinds.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
 method at 4 and 16 s, the leading methods at 64 s); their rows are pooled, budget indices are renumbered
 by budget value, DIR gets the pooled tables and the charts (tools/eval/charts.py), and PAGE.md gets, per
 scene, the reference's own noise, relMSE per method and budget, brightness per run, throughput, bootstrap
-share and stability flags, followed by a check of issue 9's targets. Nothing here measures anything: it
+share, acceptance per mutation kind (where kinds.csv has them) and stability flags, followed by a check of issue 9's targets. Nothing here measures anything: it
 only reads the tables.
 """
 import argparse
@@ -51,7 +51,7 @@ def pct(x):
 
 def pool(dirs, out):
     """Pools the tables of every eval directory into out/; returns (runs, refs, acceptance)."""
-    runs, acc, refs, cal = [], [], OrderedDict(), []
+    runs, acc, refs, cal, kinds = [], [], OrderedDict(), [], []
     fields = {}
     for d in dirs:
         r, f = read_csv(os.path.join(d, "runs.csv"))
@@ -63,6 +63,10 @@ def pool(dirs, out):
         if f:
             fields["acc"] = f
         acc += a
+        k, f = read_csv(os.path.join(d, "kinds.csv"))  # per mutation kind; older eval outputs have none
+        if f:
+            fields["kinds"] = f
+        kinds += k
         rr, f = read_csv(os.path.join(d, "refs.csv"))
         fields["refs"] = f
         for x in rr:
@@ -73,7 +77,7 @@ def pool(dirs, out):
         cal += c
     budgets = sorted({float(r["budget"]) for r in runs})
     index = {b: i for i, b in enumerate(budgets)}
-    for rows in (runs, acc):
+    for rows in (runs, acc, kinds):
         for r in rows:
             r["budget_index"] = str(index[float(r["budget"])])
     os.makedirs(out, exist_ok=True)
@@ -83,7 +87,9 @@ def pool(dirs, out):
     write_csv(os.path.join(out, "refs.csv"), list(refs.values()), fields["refs"])
     if "cal" in fields:
         write_csv(os.path.join(out, "calibration.csv"), cal, fields["cal"])
-    return runs, refs, budgets
+    if "kinds" in fields:
+        write_csv(os.path.join(out, "kinds.csv"), kinds, fields["kinds"])
+    return runs, refs, budgets, kinds
 
 
 class Group:
@@ -107,7 +113,28 @@ class Group:
         return sum(self.samples) / sum(self.seconds)
 
 
-def scene_section(scene, runs, ref, budgets, out_rel):
+def kinds_lines(kinds, bd):
+    """Acceptance per mutation kind at budget bd, per method: accepted / proposed over all runs, and the
+    share of the proposals each kind had (rjmlt's technique changes, veach-mlt's five mutations, ...)."""
+    per = OrderedDict()
+    for r in kinds:
+        if float(r["budget"]) != bd:
+            continue
+        m = per.setdefault(r["method"], OrderedDict())
+        p, a = m.get(r["kind"], (0, 0))
+        m[r["kind"]] = (p + int(r["proposed"]), a + int(r["accepted"]))
+    if not per:
+        return []
+    lines = ["Acceptance per mutation kind at %g s (accepted / proposed over the runs; in brackets the kind's "
+             "share of the proposals):" % bd, "", "| method | acceptance per kind |", "|---|---|"]
+    for m, ks in per.items():
+        total = sum(p for p, _ in ks.values()) or 1
+        lines.append("| %s | %s |" % (m, ", ".join(
+            "%s %.3f (%.0f%%)" % (k, a / p if p else 0.0, 100.0 * p / total) for k, (p, a) in ks.items() if p > 0)))
+    return lines + [""]
+
+
+def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
     lines = ["## %s" % scene, ""]
     groups = OrderedDict()
     for r in runs:
@@ -164,6 +191,7 @@ def scene_section(scene, runs, ref, budgets, out_rel):
             m, pct(mu), pct(worst), ", ".join("%+.2f" % (100 * e) for e in x.mean_err), mean_std(x.work)[0],
             x.throughput() / 1e6, share, len(x.flagged), len(x.rows), flags))
     lines.append("")
+    lines += kinds_lines(kinds, bd)
     # Which method to pick: the lowest mean relMSE at the detail budget among methods without flagged runs.
     clean = [(g[(m, bd)].rel_ms()[0], m) for m in methods if (m, bd) in g and not g[(m, bd)].flagged]
     if clean:
@@ -244,7 +272,7 @@ def main():
     ap.add_argument("--header", help="a Markdown file put at the top of the page")
     ap.add_argument("dirs", nargs="+", help="mltfarm eval output directories")
     a = ap.parse_args()
-    runs, refs, budgets = pool(a.dirs, a.out)
+    runs, refs, budgets, kinds = pool(a.dirs, a.out)
     subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "charts.py"), a.out], check=True)
     out_rel = os.path.relpath(a.out, os.path.dirname(os.path.abspath(a.page)))
     lines = []
@@ -256,7 +284,7 @@ def main():
     body = []
     for scene in scenes:
         sec, g, methods = scene_section(scene, [r for r in runs if r["scene"] == scene], refs.get(scene),
-                                        budgets, out_rel)
+                                        budgets, out_rel, [k for k in kinds if k["scene"] == scene])
         all_groups[scene] = (g, methods)
         body += sec
     lines += targets_section(all_groups, refs, budgets) + body

@@ -80,6 +80,18 @@ void writeAcceptanceCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
   }
 }
 
+void writeKindsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
+  os << "scene,method,mode,budget_index,budget,run,kind,proposed,accepted\n";
+  for (const RunRecord& r : runs) {
+    if (!r.markovChain) continue;
+    for (size_t k = 0; k < r.proposedPerKind.size() && k < r.kinds.size(); ++k) {
+      const uint64_t acc = k < r.acceptedPerKind.size() ? r.acceptedPerKind[k] : 0;
+      os << fmt::format("{},{},{},{},{},{},{},{},{}\n", csvQuote(r.scene), csvQuote(r.method), r.mode,
+                        r.budgetIndex, r.budget, r.run, csvQuote(r.kinds[k]), r.proposedPerKind[k], acc);
+    }
+  }
+}
+
 void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs) {
   os << "scene,source,parts,relMSE_floor,MSE_floor,mean_rel_stderr,seconds,cached\n";
   for (const ReferenceInfo& r : refs)

@@ -1,6 +1,8 @@
 // One evaluated run (scene x method x budget x run index) and the tables written from them.
 //   runs.csv        every run: timing, work done, error metrics, acceptance, stability flags
 //   acceptance.csv  proposed/accepted mutations per path length per Markov chain run
+//   kinds.csv       proposed/accepted mutations per mutation kind (the method's names: large, small,
+//                   technique, bidir, lens, ...) per Markov chain run
 //   refs.csv        per scene: where the reference came from and its own noise level
 #pragma once
 #include <cstdint>
@@ -27,6 +29,8 @@ struct RunRecord {
   bool markovChain = false;
   double acceptance = -1;        // overall; -1 for sample-based methods and when not reported (farm)
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;
+  std::vector<std::string> kinds;  // the method's mutation kinds, index of proposedPerKind
+  std::vector<uint64_t> proposedPerKind, acceptedPerKind;
   int chains = 0, stuckChains = 0;  // chains with acceptance below the stuck threshold
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
 };
@@ -42,6 +46,7 @@ struct ReferenceInfo {
 
 void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 void writeAcceptanceCsv(std::ostream& os, const std::vector<RunRecord>& runs);
+void writeKindsCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs);
 // Reads what writeRunsCsv wrote (the per-length acceptance is not in runs.csv). Throws
 // std::runtime_error naming the line on malformed input.
