@@ -254,12 +254,15 @@ TEST(LightPower, MonteCarloIntegralOfEmissionEqualsPower) {
   auto spot = makeSpotLight({0, 0, 0}, {0, 1, 1}, Color(3), 30, 10);
   auto spotHard = makeSpotLight({0, 0, 0}, {1, 0, 0}, Color(3), 25, 25);
   auto spotSoft = makeSpotLight({0, 0, 0}, {1, 0, 0}, Color(3), 60, 0);
+  auto spotPbrt = makeSpotLight({0, 0, 0}, {0, 1, 0}, Color(3), 30, 25, SpotFalloffCurve::PbrtQuartic);
+  auto spotPbrtSoft = makeSpotLight({0, 0, 0}, {0, 0, 1}, Color(3), 40, 0, SpotFalloffCurve::PbrtQuartic);
   auto dir = makeDirectionalLight({0, 0, -1}, Color(1.5f));
   auto env = makeConstantEnvironment(Color(0.5f, 1, 2));
   dir->preprocess(c, R);
   env->preprocess(c, R);
   uint64_t seed = 100;
-  for (const Light* l : {area.get(), point.get(), spot.get(), spotHard.get(), spotSoft.get(), dir.get(), env.get()})
+  for (const Light* l : {area.get(), point.get(), spot.get(), spotHard.get(), spotSoft.get(), spotPbrt.get(),
+                         spotPbrtSoft.get(), dir.get(), env.get()})
     expectPowerMatches(*l, 200000, seed++);
   // Closed forms.
   EXPECT_NEAR(luminance(point->power()), 4 * kPi * luminance(Color(2, 1, 0.5f)), 1e-4);
@@ -321,6 +324,23 @@ TEST(SpotLight, FalloffMonotoneAndZeroBeyondCutoff) {
       EXPECT_EQ(I, 0.0f) << deg;
     }
     prev = I;
+  }
+}
+
+// pbrt-v3's SpotLight::Falloff (coneangle 30, conedelta 5): 1 inside 25 degrees, delta^4 with delta linear in
+// cos theta between cos 30 and cos 25, 0 beyond 30 degrees.
+TEST(SpotLight, PbrtQuarticFalloff) {
+  const float cone = 30, beam = 25;
+  auto light = makeSpotLight({0, 0, 0}, {0, 0, 1}, Color(5), cone, beam, SpotFalloffCurve::PbrtQuartic);
+  const double cosTotal = std::cos(cone * kPi / 180), cosStart = std::cos(beam * kPi / 180);
+  for (double deg : {0.0, 10.0, 24.9, 25.5, 27.0, 28.5, 29.9, 30.1, 45.0}) {
+    const double theta = deg * kPi / 180;
+    const Vec3 ref(float(std::sin(theta)), 0, float(std::cos(theta)));
+    const float I = light->sampleLi(ref, {0, 0})->L.r;
+    double expected = 5;
+    if (deg >= cone) expected = 0;
+    else if (deg > beam) expected = 5 * std::pow((std::cos(theta) - cosTotal) / (cosStart - cosTotal), 4);
+    EXPECT_NEAR(I, expected, 2e-3 * 5) << deg;
   }
 }
 

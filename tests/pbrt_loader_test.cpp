@@ -203,6 +203,7 @@ AttributeBegin
   expectVec(s.lights[1].direction, {0, -1, 0});
   EXPECT_FLOAT_EQ(s.lights[1].cutoffAngleDeg, 25.0f);
   EXPECT_FLOAT_EQ(s.lights[1].beamWidthDeg, 25.0f);
+  EXPECT_EQ(s.lights[1].spotFalloff, LightDesc::SpotFalloff::PbrtQuartic);
   EXPECT_EQ(s.lights[2].type, LightDesc::Type::Directional);
   expectVec(s.lights[2].direction, {0, 0, -1});  // travel direction from -> to
   EXPECT_FLOAT_EQ(s.lights[2].intensity.r, 2.0f);
@@ -260,7 +261,8 @@ TEST(PbrtLoader, ErrorsNameFileLineAndConstruct) {
   expectError(d, "Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float zmax\" 0.5\n", 3, "partial spheres");
   expectError(d, "Camera \"perspective\"\nWorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 5] \"point P\" [0 0 0 1 0 0 0 1 0]\n",
               3, "out of range");
-  expectError(d, "Camera \"perspective\"\nWorldBegin\nLightSource \"spot\"\n", 3, "conedelta");
+  expectError(d, "Camera \"perspective\"\nWorldBegin\nLightSource \"spot\" \"float coneangle\" 10 \"float conedelta\" 12\n", 3,
+              "conedelta must be in [0, coneangle]");
   expectError(d, "Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"string mapname\" \"sky.exr\"\n", 3, "environment maps");
   expectError(d, "Camera \"perspective\"\nWorldBegin\nInclude \"missing.pbrt\"\n", 3, "not found");
   expectError(d, "Camera \"perspective\"\nWorldBegin\nNamedMaterial \"nope\"\n", 3, "no material named 'nope'");

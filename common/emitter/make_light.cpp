@@ -17,7 +17,9 @@ std::unique_ptr<Light> makeLight(const LightDesc& desc) {
   switch (desc.type) {
     case LightDesc::Type::Point: return makePointLight(desc.position, I);
     case LightDesc::Type::Spot:
-      return makeSpotLight(desc.position, desc.direction, I, desc.cutoffAngleDeg, desc.beamWidthDeg);
+      return makeSpotLight(desc.position, desc.direction, I, desc.cutoffAngleDeg, desc.beamWidthDeg,
+                           desc.spotFalloff == LightDesc::SpotFalloff::PbrtQuartic ? SpotFalloffCurve::PbrtQuartic
+                                                                                   : SpotFalloffCurve::MitsubaLinear);
     case LightDesc::Type::Directional: return makeDirectionalLight(desc.direction, I);
     case LightDesc::Type::Constant: return makeConstantEnvironment(I);
   }

@@ -260,13 +260,15 @@ void Loader::lightSource(const Token& where) {
     l.direction = normalize(dir);
     const double cone = p.getFloat("coneangle", 30), delta = p.getFloat("conedelta", 5);
     if (!(cone > 0 && cone < 90)) p.fail("spot: coneangle must be in (0, 90)");
-    if (delta != 0) {
-      const std::string msg = "spot: pbrt's smooth falloff (conedelta != 0; pbrt's default is 5) differs from ours; "
-                              "give \"float conedelta\" 0";
+    if (!(delta >= 0 && delta <= cone)) {
+      const std::string msg = "spot: conedelta must be in [0, coneangle]";
       if (const Param* q = p.find("conedelta")) p.fail(*q, msg);
       p.fail(msg);
     }
-    l.cutoffAngleDeg = l.beamWidthDeg = float(cone);
+    // pbrt-v3: full intensity inside coneangle - conedelta, its quartic falloff to zero at coneangle.
+    l.cutoffAngleDeg = float(cone);
+    l.beamWidthDeg = float(cone - delta);
+    l.spotFalloff = LightDesc::SpotFalloff::PbrtQuartic;
   } else if (type == "distant") {
     l.type = LightDesc::Type::Directional;
     l.intensity = p.optColor("L").value_or(Color(1.0f)) * scale;

@@ -80,6 +80,10 @@ struct LightDesc {
   Vec3 direction{0, 0, 1};         // Spot axis, Directional travel direction (unit)
   float cutoffAngleDeg = 20.0f;    // Spot: total cone half-angle
   float beamWidthDeg = 15.0f;      // Spot: full-intensity half-angle (smooth falloff in between)
+  // Spot: the curve between beam and cutoff. Mitsuba's is linear in the angle; pbrt-v3's (coneangle,
+  // conedelta: beam = coneangle - conedelta) is delta^4 with delta linear in the cosine.
+  enum class SpotFalloff { MitsubaLinear, PbrtQuartic };
+  SpotFalloff spotFalloff = SpotFalloff::MitsubaLinear;
 };
 
 struct CameraDesc {
