@@ -4,7 +4,9 @@
 // statistics: per mutation kind (rjmlt: large, small, technique; veach-mlt: its five moves) the proposals
 // and acceptance, per path length the mutations and acceptance (rjmlt), and b. Those travel from the
 // workers as ChainStats (proto/convert.cpp) and are merged by the coordinator: a farm that dropped or
-// mis-merged them would write other numbers than the in-process render.
+// mis-merged them would write other numbers than the in-process render. The wall time per move kind
+// (issue 12) travels with every task (the partial films the coordinator keeps) and stays out of the
+// farm's image, whose bytes must not depend on the run; the in-process image has it (NAMESeconds).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -14,6 +16,8 @@
 
 #include "common/io/exr_io.h"
 #include "common/methods/image_metadata.h"
+#include "common/methods/registry.h"
+#include "coordinator/merge.h"
 #include "tests/farm/farm_harness.h"
 #include "tests/farm/in_process_farm.h"
 
@@ -25,6 +29,7 @@ bool farmOnlyKey(const std::string& key) { return key.rfind("farm.", 0) == 0; }
 
 struct Rendered {
   ExrImage farm;
+  std::vector<PartialExr> partials;  // the tasks' partial films as the coordinator stored them
   cli::LocalRenderResult local;
   uint64_t tasksOfWorker[2] = {0, 0};
 };
@@ -34,10 +39,14 @@ Rendered renderBothWays(const std::string& scene, const std::string& args, const
   WorkerOptions wo;
   wo.threads = 1;
   wo.taskDelayMs = 10;  // each worker holds a lease a moment, so that both of them get tasks
-  InProcessFarm farm(2, wo);
+  CoordinatorOptions co;
+  co.keepPartials = true;
+  InProcessFarm farm(2, wo, co);
   Rendered r;
   r.farm = readExr(farm.render(scene, cl, name + ".exr"));
   farm.stop();
+  for (const auto& e : std::filesystem::directory_iterator(farm.stateDir() + "/jobs/job-1/partials"))
+    r.partials.push_back(readPartialExr(e.path().string()));
   for (int i = 0; i < 2; ++i) r.tasksOfWorker[i] = uint64_t(farm.worker(size_t(i)).metrics().tasksUploaded.Value());
   r.local = renderInProcess(scene, cl);
   return r;
@@ -76,6 +85,23 @@ void expectSameImageAndStatistics(const Rendered& r, const std::string& method) 
   for (const auto& [key, value] : r.farm.metadata.numbers)
     EXPECT_TRUE(farmOnlyKey(key) || local.numbers.count(key)) << method << ": the farm's image has " << key
                                                               << ", the in-process one not";
+  // The workers' wall time per move kind (issue 12) came with every task; the image has none of it.
+  const std::vector<std::string>& kinds = mutationKindNames(method);
+  ASSERT_FALSE(r.partials.empty());
+  std::vector<double> proposed(kinds.size(), 0.0);
+  for (const PartialExr& p : r.partials) {
+    const ChainStats& st = p.result.stats;
+    ASSERT_EQ(st.secondsPerKind.size(), kinds.size()) << method << ", task " << p.task;
+    for (size_t k = 0; k < kinds.size(); ++k) {
+      EXPECT_EQ(st.secondsPerKind[k] > 0, st.proposedPerKind[k] > 0) << method << ", task " << p.task << ": " << kinds[k];
+      proposed[k] += double(st.proposedPerKind[k]);
+    }
+  }
+  for (size_t k = 0; k < kinds.size(); ++k) {
+    EXPECT_EQ(number(r.farm, kinds[k] + "Steps"), proposed[k]) << method << ": " << kinds[k];
+    EXPECT_EQ(r.farm.metadata.numbers.count(kinds[k] + "Seconds"), 0u) << method << ": " << kinds[k];
+    if (proposed[k] > 0) EXPECT_GT(r.local.metadata.numbers.at(kinds[k] + "Seconds"), 0.0) << method << ": " << kinds[k];
+  }
 }
 
 // The keys of one mutation kind (chain_report.h): NAMESteps (proposals) and acceptanceNAME.

@@ -225,17 +225,22 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
       kinds += fmt::format("{}{} steps {:.1f}%", kinds.empty() ? "" : ", ", k.name, 100 * k.acceptance);
     out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
   }
-  std::string rates;
-  for (const MutationKindReport& k : r.kinds)
-    if (k.seconds > 0)
-      rates += fmt::format("{}{} {:.4g} ({} in {:.3g} s)", rates.empty() ? "" : ", ", k.name, k.mutationsPerSecond(),
-                           k.proposed, k.seconds);
+  const std::string rates = formatMoveRates(r);
   if (!rates.empty()) out += fmt::format("mutations/s per move, one thread: {}\n", rates);
   // {} prints the shortest decimal that reads back as the same double: typing it reproduces the image.
   out += fmt::format("{} mutations ({} per pixel, {} chains) in {:.2f} s{} = {:.4g} mutations/s\n", r.mutations,
                      r.mutationsPerPixel, r.chains, chainSeconds, secondsNote,
                      chainSeconds > 0 ? double(r.mutations) / chainSeconds : 0.0);
   return out;
+}
+
+std::string formatMoveRates(const ChainReport& r) {
+  std::string rates;
+  for (const MutationKindReport& k : r.kinds)
+    if (k.seconds > 0)
+      rates += fmt::format("{}{} {:.4g} ({} in {:.3g} s)", rates.empty() ? "" : ", ", k.name, k.mutationsPerSecond(),
+                           k.proposed, k.seconds);
+  return rates;
 }
 
 std::string chainWarnings(const ChainReport& r) {

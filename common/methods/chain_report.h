@@ -80,6 +80,9 @@ ChainReport chainReportFromMetadata(const ImageMetadata& metadata);
 // (secondsNote, e.g. " (wall time incl. startup)", follows it when it is something else).
 std::string formatChainSummary(const ChainReport& report, double bootstrapSeconds, double chainSeconds,
                                const std::string& secondsNote = "");
+// "large 2000 (1000 in 0.5 s), small ..." for the kinds with seconds > 0: their mutations per second on one
+// thread; "" if the report has no seconds.
+std::string formatMoveRates(const ChainReport& report);
 // "warning: ... increase --bootstrap\n" when b's relative standard error exceeds kMaxRelativeStdErrB, else "".
 std::string chainWarnings(const ChainReport& report);
 

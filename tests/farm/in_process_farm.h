@@ -45,12 +45,12 @@ inline cli::LocalRenderResult renderInProcess(const std::string& scene, const cl
 class InProcessFarm {
  public:
   // workerOptions: applied to every worker (coordinator address and cache directory are set here).
-  explicit InProcessFarm(int workers, WorkerOptions workerOptions = {}) {
+  // coordinatorOptions: the state directory and lease wait are set here.
+  explicit InProcessFarm(int workers, WorkerOptions workerOptions = {}, CoordinatorOptions co = {}) {
     dir_ = std::filesystem::temp_directory_path() / ("mltfarm-inproc-" + std::to_string(::getpid()) + "-" +
                                                      std::to_string(serial()++));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
-    CoordinatorOptions co;
     co.stateDir = (dir_ / "state").string();
     co.leaseWaitSeconds = 0.2;
     coordinator_ = std::make_unique<Coordinator>(co);
@@ -84,6 +84,7 @@ class InProcessFarm {
   Worker& worker(size_t i) { return *workers_.at(i); }
   const ChannelOptions& channel() const { return channel_; }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string stateDir() const { return (dir_ / "state").string(); }
 
   // Submits `scene` with these settings, waits until the job ends (expects Done) and fetches its EXR to
   // `name` in the farm's directory; returns the path.
