@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "common/job/mlt_job.h"
+#include "common/methods/chain_report.h"
 #include "common/core/durable_file.h"
 #include "coordinator/coordinator.h"
 #include "coordinator/crash_point.h"
@@ -37,7 +38,13 @@ void Coordinator::merge(int64_t id) {
     fs::path dir = jobDir(id);
     fs::create_directories(dir);
     writeFinalImages((dir / "image.tmp.exr").string(), (dir / "image.tmp.png").string(), identity, *plan, merged);
-    if (isMarkovChainMethod(plan->settings.method)) refined = refinedB(plan->norm, merged.stats);
+    if (isMarkovChainMethod(plan->settings.method)) {
+      refined = refinedB(plan->norm, merged.stats);
+      // The workers' wall time per move kind, summed (not in the image: its bytes do not depend on the run).
+      const std::string rates = formatMoveRates(makeChainReport(*plan, merged));
+      if (!rates.empty())
+        spdlog::info("job={} event=move_rates per_thread=\"{}\"", identity.jobId, rates);
+    }
     crashPoint("final-merge");
     // Durable before the job is DONE: a DONE job's image survives a power loss (and if it is missing
     // anyway, the restart merges it again, recovery.cpp).

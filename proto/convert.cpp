@@ -310,6 +310,7 @@ v1::ChainStats toProto(const ChainStats& s) {
   for (uint64_t v : s.acceptedPerLength) p.add_accepted_per_length(v);
   for (uint64_t v : s.proposedPerKind) p.add_proposed_per_kind(v);
   for (uint64_t v : s.acceptedPerKind) p.add_accepted_per_kind(v);
+  for (double v : s.secondsPerKind) p.add_seconds_per_kind(v);
   for (const TargetSums& t : s.largeStepSums) *p.add_large_step_sums() = toProto(t);
   return p;
 }
@@ -319,10 +320,14 @@ ChainStats fromProto(const v1::ChainStats& p) {
   ChainStats s;
   s.proposedPerLength.assign(p.proposed_per_length().begin(), p.proposed_per_length().end());
   s.acceptedPerLength.assign(p.accepted_per_length().begin(), p.accepted_per_length().end());
-  if (p.proposed_per_kind_size() > kMaxKinds || p.accepted_per_kind_size() > kMaxKinds)
+  if (p.proposed_per_kind_size() > kMaxKinds || p.accepted_per_kind_size() > kMaxKinds ||
+      p.seconds_per_kind_size() > kMaxKinds)
     throw WireError("stats.proposed_per_kind", fmt::format("at most {} mutation kinds", kMaxKinds));
+  for (double v : p.seconds_per_kind())
+    if (!(v >= 0) || !std::isfinite(v)) throw WireError("stats.seconds_per_kind", fmt::format("{} is not a time", v));
   s.proposedPerKind.assign(p.proposed_per_kind().begin(), p.proposed_per_kind().end());
   s.acceptedPerKind.assign(p.accepted_per_kind().begin(), p.accepted_per_kind().end());
+  s.secondsPerKind.assign(p.seconds_per_kind().begin(), p.seconds_per_kind().end());
   for (const auto& t : p.large_step_sums()) s.largeStepSums.push_back(fromProto(t, "stats.large_step_sums"));
   return s;
 }

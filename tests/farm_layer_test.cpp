@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "common/farm/tasks.h"
@@ -77,6 +78,7 @@ PartialResult somePartial() {
   r.seconds = 1.5;
   r.stats.proposedPerKind = {10, 20};
   r.stats.acceptedPerKind = {3, 9};
+  r.stats.secondsPerKind = {0.125, 0.75};  // wall time per move kind (issue 12)
   return r;
 }
 
@@ -96,6 +98,7 @@ TEST(FarmLayer, ResultFilesRoundTripAndTornFilesAreRefused) {
   EXPECT_EQ(back->samples, r.samples);
   EXPECT_EQ(back->units, r.units);
   EXPECT_EQ(back->stats.acceptedPerKind, r.stats.acceptedPerKind);
+  EXPECT_EQ(back->stats.secondsPerKind, r.stats.secondsPerKind);
   std::string why;
   EXPECT_FALSE(store.load(3, 5, &why));
   EXPECT_EQ(why, "missing");
@@ -137,6 +140,22 @@ void expectContiguous(const std::vector<TaskRange>& tasks, uint32_t units) {
     EXPECT_LT(tasks[t].begin, tasks[t].end);
     if (t > 0) {
       EXPECT_EQ(tasks[t].begin, tasks[t - 1].end);
+    }
+  }
+}
+
+// The wall time per move kind travels with the partial header; a negative or non-finite one is refused.
+TEST(FarmLayer, MoveSecondsTravelWithThePartialAndBadOnesAreRefused) {
+  PartialResult r = somePartial();
+  const PartialResult back = wire::partialFromHeaderBytes(wire::partialHeaderBytes(r), r.film);
+  EXPECT_EQ(back.stats.secondsPerKind, r.stats.secondsPerKind);
+  for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    r.stats.secondsPerKind = {0.5, bad};
+    try {
+      wire::partialFromHeaderBytes(wire::partialHeaderBytes(r), r.film);
+      ADD_FAILURE() << "seconds " << bad << " accepted";
+    } catch (const wire::WireError& e) {
+      EXPECT_NE(std::string(e.what()).find("seconds_per_kind"), std::string::npos) << e.what();
     }
   }
 }

@@ -289,6 +289,7 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   ImageMetadata m;
   m.strings["method"] = "mmlt";
   addChainMetadata(r, m);
+  addMoveSecondsMetadata(r, m);  // as the in-process image has them (the summary prints mutations/s per move)
   const ChainReport back = chainReportFromMetadata(m);
   EXPECT_EQ(formatChainSummary(back, 1.5, 2.5), formatChainSummary(r, 1.5, 2.5));
   EXPECT_EQ(back.settings.largeStepProb, plan.settings.largeStepProb);

@@ -9,8 +9,9 @@
 namespace mlt {
 
 namespace {
-void addVectors(std::vector<uint64_t>& a, const std::vector<uint64_t>& b) {
-  if (a.size() < b.size()) a.resize(b.size(), 0);
+template <class T>
+void addVectors(std::vector<T>& a, const std::vector<T>& b) {
+  if (a.size() < b.size()) a.resize(b.size(), T(0));
   for (size_t i = 0; i < b.size(); ++i) a[i] += b[i];
 }
 }  // namespace
@@ -20,6 +21,7 @@ void ChainStats::add(const ChainStats& o) {
   addVectors(acceptedPerLength, o.acceptedPerLength);
   addVectors(proposedPerKind, o.proposedPerKind);
   addVectors(acceptedPerKind, o.acceptedPerKind);
+  addVectors(secondsPerKind, o.secondsPerKind);
   addPerSlot(largeStepSums, o.largeStepSums);
 }
 

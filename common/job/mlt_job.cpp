@@ -398,6 +398,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const size_t kinds = spec.mutationKinds().size();
   st.proposedPerKind.assign(counts.proposed, counts.proposed + kinds);
   st.acceptedPerKind.assign(counts.accepted, counts.accepted + kinds);
+  st.secondsPerKind.assign(counts.seconds, counts.seconds + kinds);
   for (size_t kind = 0; kind < kinds; ++kind) {
     st.proposedPerLength[slot] += counts.proposed[kind];
     st.acceptedPerLength[slot] += counts.accepted[kind];

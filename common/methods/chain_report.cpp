@@ -73,7 +73,8 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   for (size_t k = 0; k < names.size(); ++k) {
     const auto& P = merged.stats.proposedPerKind;
     const auto& A = merged.stats.acceptedPerKind;
-    MutationKindReport kind{names[k], k < P.size() ? P[k] : 0, 0.0};
+    const auto& S = merged.stats.secondsPerKind;
+    MutationKindReport kind{names[k], k < P.size() ? P[k] : 0, 0.0, k < S.size() ? S[k] : 0.0};
     kind.acceptance = ratio(k < A.size() ? A[k] : 0, kind.proposed);
     proposed += kind.proposed;
     accepted += k < A.size() ? A[k] : 0;
@@ -148,6 +149,11 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   }
 }
 
+void addMoveSecondsMetadata(const ChainReport& r, ImageMetadata& m) {
+  for (const MutationKindReport& k : r.kinds)
+    if (k.seconds > 0) m.numbers[k.name + "Seconds"] = k.seconds;
+}
+
 ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   ChainReport r;
   if (const auto it = m.strings.find("method"); it != m.strings.end()) r.method = it->second;
@@ -169,7 +175,8 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   for (size_t at = 0; !kindList.empty() && at <= kindList.size();) {
     const size_t comma = std::min(kindList.find(',', at), kindList.size());
     const std::string name = kindList.substr(at, comma - at);
-    r.kinds.push_back({name, uint64_t(number(m, name + "Steps")), number(m, "acceptance" + capitalized(name))});
+    r.kinds.push_back({name, uint64_t(number(m, name + "Steps")), number(m, "acceptance" + capitalized(name)),
+                       number(m, name + "Seconds")});
     at = comma + 1;
   }
   if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
@@ -221,11 +228,22 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
       kinds += fmt::format("{}{} steps {:.1f}%", kinds.empty() ? "" : ", ", k.name, 100 * k.acceptance);
     out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
   }
+  const std::string rates = formatMoveRates(r);
+  if (!rates.empty()) out += fmt::format("mutations/s per move, one thread: {}\n", rates);
   // {} prints the shortest decimal that reads back as the same double: typing it reproduces the image.
   out += fmt::format("{} mutations ({} per pixel, {} chains) in {:.2f} s{} = {:.4g} mutations/s\n", r.mutations,
                      r.mutationsPerPixel, r.chains, chainSeconds, secondsNote,
                      chainSeconds > 0 ? double(r.mutations) / chainSeconds : 0.0);
   return out;
+}
+
+std::string formatMoveRates(const ChainReport& r) {
+  std::string rates;
+  for (const MutationKindReport& k : r.kinds)
+    if (k.seconds > 0)
+      rates += fmt::format("{}{} {:.4g} ({} in {:.3g} s)", rates.empty() ? "" : ", ", k.name, k.mutationsPerSecond(),
+                           k.proposed, k.seconds);
+  return rates;
 }
 
 std::string chainWarnings(const ChainReport& r) {

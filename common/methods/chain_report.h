@@ -11,6 +11,10 @@
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
 //   largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
 //   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
+// Wall-clock keys, written only where the image may depend on the run (`mltfarm render --in-process`, by
+// addMoveSecondsMetadata; never by the farm, whose images are byte-identical from run to run): per kind
+// NAMESeconds, the wall time of its steps summed over chains (chain.h kMoveTimingStride), so that
+// NAMESteps / NAMESeconds is the kind's mutations per second on one thread.
 // Strings: kernel ("kelemen" | "gaussian"), splatting ("expected-value" | "kelemen-mis"), mutationKinds
 // (the kind names, comma-separated).
 #pragma once
@@ -38,6 +42,8 @@ struct MutationKindReport {
   std::string name;  // the method's name for it (RenderMethod::mutationKinds)
   uint64_t proposed = 0;
   double acceptance = 0;
+  double seconds = 0;  // wall time of its steps summed over chains (0: not measured, e.g. a farm image)
+  double mutationsPerSecond() const { return seconds > 0 ? double(proposed) / seconds : 0.0; }
 };
 
 struct ChainReport {
@@ -61,16 +67,22 @@ struct ChainReport {
 // From a plan and the chains merged so far (units of the direct pass of separateDirect are not chains).
 ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged);
 void addChainMetadata(const ChainReport& report, ImageMetadata& metadata);
+// NAMESeconds of every kind with seconds > 0 (wall-clock keys: not for the farm's images).
+void addMoveSecondsMetadata(const ChainReport& report, ImageMetadata& metadata);
 // The inverse of addChainMetadata (keys that are missing stay 0; hasAcceptance tells if acceptance was there).
 ChainReport chainReportFromMetadata(const ImageMetadata& metadata);
 
 // The summary printed after a render, several lines, each ending in '\n':
 //   b = X ± SE (rel. R%, N bootstrap samples, T s)
-//   a table per path length (mmlt), acceptance, mutations / seconds / mutations per second.
+//   a table per path length (mmlt), acceptance, mutations / seconds / mutations per second, and the
+//   mutations per second of each move on one thread when the report has their seconds.
 // bootstrapSeconds < 0 leaves the time out of the first line; chainSeconds is the wall time of the chains
 // (secondsNote, e.g. " (wall time incl. startup)", follows it when it is something else).
 std::string formatChainSummary(const ChainReport& report, double bootstrapSeconds, double chainSeconds,
                                const std::string& secondsNote = "");
+// "large 2000 (1000 in 0.5 s), small ..." for the kinds with seconds > 0: their mutations per second on one
+// thread; "" if the report has no seconds.
+std::string formatMoveRates(const ChainReport& report);
 // "warning: ... increase --bootstrap\n" when b's relative standard error exceeds kMaxRelativeStdErrB, else "".
 std::string chainWarnings(const ChainReport& report);
 

@@ -1,6 +1,7 @@
 #include "common/mlt/chain.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -18,11 +19,17 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
   if (mis && !(config.b > 0)) throw std::invalid_argument("runChain: Kelemen MIS splatting needs b > 0");
   const double bPlarge = mis ? config.b * config.largeStepProb : 0.0;
 
+  using Clock = std::chrono::steady_clock;
+  double timedSeconds[kMaxMutationKinds] = {};
+  uint64_t timedSteps[kMaxMutationKinds] = {};
+
   ChainCounts counts;
   PathContribution* x = &current;
   PathContribution* y = &scratch;
   double xWeight = 0;  // accumulated, not yet splatted weight of the current state
   for (uint64_t m = 0; m < mutations; ++m) {
+    const bool timed = m % kMoveTimingStride == 0;
+    const Clock::time_point stepStart = timed ? Clock::now() : Clock::time_point{};
     const Proposal p = state.propose();
     y->clear();
     target.evaluate(*y);
@@ -58,6 +65,21 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
       if (wy > 0 && !y->splats.empty()) sink.splat(*y, wy);
       state.reject();
     }
+    if (timed) {
+      timedSeconds[kind] += std::chrono::duration<double>(Clock::now() - stepStart).count();
+      ++timedSteps[kind];
+    }
+  }
+  double allSeconds = 0;
+  uint64_t allSteps = 0;
+  for (int k = 0; k < kMaxMutationKinds; ++k) {
+    allSeconds += timedSeconds[k];
+    allSteps += timedSteps[k];
+  }
+  for (int k = 0; k < kMaxMutationKinds; ++k) {
+    const double perStep = timedSteps[k] > 0 ? timedSeconds[k] / double(timedSteps[k])
+                                             : allSeconds / double(std::max<uint64_t>(allSteps, 1));
+    counts.seconds[k] = perStep * double(counts.proposed[k]);
   }
   if (xWeight > 0) sink.splat(*x, xWeight);
   if (x != &current) std::swap(current, scratch);  // O(1): swaps the vectors' buffers

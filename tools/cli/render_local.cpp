@@ -274,6 +274,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   std::optional<ChainReport> report;
   if (chains) {
     report = makeChainReport(plan, result.merged);
+    addMoveSecondsMetadata(*report, m);  // wall time per move kind (chain.h)
     m.numbers["bootstrapSeconds"] = plan.norm.bootstrapSeconds;
     m.numbers["chainSeconds"] = result.runSeconds;
     m.numbers["mutationsPerSecond"] = double(result.merged.samples) / std::max(result.runSeconds, 1e-9);

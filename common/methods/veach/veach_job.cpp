@@ -132,6 +132,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   ChainStats& st = result.stats;
   st.proposedPerKind.assign(counts.proposed, counts.proposed + kNumKinds);
   st.acceptedPerKind.assign(counts.accepted, counts.accepted + kNumKinds);
+  st.secondsPerKind.assign(counts.seconds, counts.seconds + kNumKinds);
   st.proposedPerLength.assign(1, 0);
   st.acceptedPerLength.assign(1, 0);
   for (int k = 0; k < kNumKinds; ++k) {
