@@ -85,7 +85,8 @@ JobStatus Coordinator::submitChecked(SubmitRequest req) {
   if (!req.client.empty()) {
     std::lock_guard lock(mu_);
     const auto unfinished = std::count_if(jobs_.begin(), jobs_.end(), [&](const auto& j) {
-      return !j.second.deleted && j.second.client == req.client && !isTerminal(j.second.status.state);
+      // rec.client is stored with the job: the count survives a restart (recovery.cpp reloads it).
+      return !j.second.deleted && j.second.rec.client == req.client && !isTerminal(j.second.status.state);
     });
     if (size_t(unfinished) >= quota.maxJobsPerClient)
       throw FarmError(Code::ResourceExhausted,
@@ -193,6 +194,7 @@ JobStatus Coordinator::submitChecked(SubmitRequest req) {
   rec.sceneHash = hash;
   rec.sceneFile = bundle.sceneFile;
   rec.submittedAt = unixNow();
+  rec.client = req.client;
   rec.id = store_->insertJob(rec);
   metrics_.jobsSubmitted.Increment();
   Job job;
@@ -205,7 +207,6 @@ JobStatus Coordinator::submitChecked(SubmitRequest req) {
   job.status.width = s.width;
   job.status.height = s.height;
   job.defines = req.defines;
-  job.client = req.client;
   Job& j = jobs_.emplace(rec.id, std::move(job)).first->second;
   refreshProgress(j);
   spdlog::info("job={} event=submitted scene_hash={} scene={} method={} size={}x{} seed={} priority={}", j.status.jobId,

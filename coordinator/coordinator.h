@@ -104,7 +104,6 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     PartialResult merged;
     uint32_t mergedTasks = 0;
     std::map<uint32_t, PartialResult> waiting;
-    std::string client;    // who submitted it (this process only): the jobs-per-client quota
     bool deleted = false;  // DeleteJob: files gone, invisible to clients; kept for threads still holding the id
   };
   struct LeaseRec {

@@ -82,7 +82,16 @@ JobStore::JobStore(const std::string& path) : path_(path) {
   exec("CREATE TABLE IF NOT EXISTS jobs("
        " id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT, priority INTEGER, state INTEGER,"
        " settings BLOB, scene_hash TEXT, scene_file TEXT, plan BLOB, tasks INTEGER, error TEXT,"
-       " submitted_at REAL)");
+       " submitted_at REAL, client TEXT NOT NULL DEFAULT '')");
+  // Migrations: columns added since the table was first created.
+  if (!hasColumn("jobs", "client")) exec("ALTER TABLE jobs ADD COLUMN client TEXT NOT NULL DEFAULT ''");
+}
+
+bool JobStore::hasColumn(const char* table, const std::string& column) {
+  Stmt s(db_, fmt::format("PRAGMA table_info({})", table).c_str(), path_);
+  while (s.step())
+    if (s.str(1) == column) return true;
+  return false;
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
@@ -98,10 +107,10 @@ void JobStore::exec(const char* sql) {
 
 int64_t JobStore::insertJob(const JobRecord& r) {
   Stmt s(db_, "INSERT INTO jobs(name, priority, state, settings, scene_hash, scene_file, plan, tasks, error,"
-              " submitted_at) VALUES(?,?,?,?,?,?,?,?,?,?)", path_);
+              " submitted_at, client) VALUES(?,?,?,?,?,?,?,?,?,?,?)", path_);
   s.bindText(1, r.name).bind(2, int64_t(r.priority)).bind(3, int64_t(r.state)).bindBlob(4, r.settings)
       .bindText(5, r.sceneHash).bindText(6, r.sceneFile).bindBlob(7, r.plan).bind(8, int64_t(r.tasks))
-      .bindText(9, r.error).bind(10, r.submittedAt);
+      .bindText(9, r.error).bind(10, r.submittedAt).bindText(11, r.client);
   s.step();
   return sqlite3_last_insert_rowid(db_);
 }
@@ -126,7 +135,7 @@ void JobStore::deleteJob(int64_t id) {
 
 std::vector<JobRecord> JobStore::loadJobs() {
   Stmt s(db_, "SELECT id, name, priority, state, settings, scene_hash, scene_file, plan, tasks, error,"
-              " submitted_at FROM jobs ORDER BY id", path_);
+              " submitted_at, client FROM jobs ORDER BY id", path_);
   std::vector<JobRecord> out;
   while (s.step()) {
     JobRecord r;
@@ -141,6 +150,7 @@ std::vector<JobRecord> JobStore::loadJobs() {
     r.tasks = uint32_t(s.i64(8));
     r.error = s.str(9);
     r.submittedAt = s.dbl(10);
+    r.client = s.str(11);
     out.push_back(std::move(r));
   }
   return out;

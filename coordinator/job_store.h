@@ -23,11 +23,14 @@ struct JobRecord {
   uint32_t tasks = 0;
   std::string error;
   double submittedAt = 0;        // unix seconds
+  std::string client;            // who submitted it (the peer host): the jobs-per-client quota; "" if unknown
 };
 
 class JobStore {
  public:
-  explicit JobStore(const std::string& path);  // creates the schema if needed; throws std::runtime_error
+  // Creates the schema if needed, and adds the columns a database from an earlier version lacks (additive:
+  // such a database opens, its jobs have no client). Throws std::runtime_error.
+  explicit JobStore(const std::string& path);
   ~JobStore();
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
@@ -40,6 +43,7 @@ class JobStore {
 
  private:
   void exec(const char* sql);
+  bool hasColumn(const char* table, const std::string& column);
   sqlite3* db_ = nullptr;
   std::string path_;
 };

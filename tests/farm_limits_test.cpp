@@ -3,9 +3,12 @@
 // DeleteJob removes a job's files, and error messages echo client input only as a short prefix.
 #include <gtest/gtest.h>
 
+#include <sqlite3.h>
+
 #include <filesystem>
 
 #include "coordinator/coordinator.h"
+#include "coordinator/job_store.h"
 #include "coordinator/service.h"
 #include "tests/farm/farm_harness.h"
 
@@ -109,6 +112,80 @@ TEST(FarmLimits, QuotasRefuseBigBundlesManyFilesLongNamesAndBusyClients) {
   EXPECT_NE(e.message().find("--max-jobs-per-client"), std::string::npos) << e.message();
   c.cancel(first.jobId);
   EXPECT_NO_THROW(c.submitBundle(good, "scene.xml", tiny(), 0, "second"));
+}
+
+// The quota counts the jobs stored with their client: a restarted coordinator still refuses a client at
+// its limit (the count used to live in memory only and started again from zero), and serves another one.
+TEST(FarmLimits, JobsPerClientQuotaSurvivesARestart) {
+  TempDir dir;
+  SubmitQuotas q;
+  q.maxJobsPerClient = 2;
+  auto start = [&] {
+    CoordinatorOptions o;
+    o.stateDir = dir / "state";
+    o.quotas = q;
+    return std::make_unique<Coordinator>(o);
+  };
+  auto request = [](const std::string& client) {
+    SubmitRequest r;
+    const wire::SubmittedSettings s = tiny();
+    r.settings = s.settings;
+    r.hasSize = r.hasMaxDepth = r.hasSpp = true;
+    r.bundle = {{"scene.xml", kScene}, {"tri.obj", kObj}};
+    r.bundleSceneFile = "scene.xml";
+    r.client = client;
+    return r;
+  };
+  auto refused = [&](Coordinator& c, const std::string& client) {
+    try {
+      c.submit(request(client));
+      ADD_FAILURE() << client << ": accepted past its quota";
+    } catch (const FarmError& e) {
+      EXPECT_EQ(int(e.code()), int(FarmError::Code::ResourceExhausted)) << e.what();
+      EXPECT_NE(std::string(e.what()).find("2 unfinished jobs"), std::string::npos) << e.what();
+    }
+  };
+  const std::string busy = "ipv4:10.0.0.1", other = "ipv4:10.0.0.2";
+  auto coordinator = start();  // no workers: the jobs stay unfinished
+  coordinator->submit(request(busy));
+  coordinator->submit(request(busy));
+  refused(*coordinator, busy);
+  coordinator->stop();
+  coordinator.reset();
+  coordinator = start();  // the same state directory
+  refused(*coordinator, busy);
+  EXPECT_EQ(coordinator->submit(request(other)).jobId, "job-3");
+  refused(*coordinator, busy);
+  coordinator->stop();
+}
+
+// A state directory written before jobs carried their client opens: its jobs have none, new ones do.
+TEST(FarmLimits, AnOldJobTableWithoutAClientColumnOpens) {
+  TempDir dir;
+  const std::string db = dir / "farm.db";
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(raw,
+                         "CREATE TABLE jobs(id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT, priority INTEGER,"
+                         " state INTEGER, settings BLOB, scene_hash TEXT, scene_file TEXT, plan BLOB, tasks INTEGER,"
+                         " error TEXT, submitted_at REAL);"
+                         "INSERT INTO jobs(name, priority, state, tasks, submitted_at) VALUES('old', 0, 0, 0, 1.0);",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(raw);
+  {
+    JobStore store(db);
+    JobRecord r;
+    r.name = "new";
+    r.client = "ipv4:10.0.0.1";
+    EXPECT_EQ(store.insertJob(r), 2);
+  }
+  JobStore reopened(db);  // migrated once: opening again changes nothing
+  const std::vector<JobRecord> jobs = reopened.loadJobs();
+  ASSERT_EQ(jobs.size(), 2u);
+  EXPECT_EQ(jobs[0].name, "old");
+  EXPECT_EQ(jobs[0].client, "");
+  EXPECT_EQ(jobs[1].client, "ipv4:10.0.0.1");
 }
 
 TEST(FarmLimits, ARejectedBundleIsDeleted) {

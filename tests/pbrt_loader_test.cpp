@@ -247,6 +247,25 @@ WorldEnd
   for (const Vec3& p : s.meshes[3].positions) EXPECT_NEAR(p.z, 1.0f, 1e-6);
 }
 
+// The camera's transform follows the rule of a Mitsuba sensor's to_world (common/scene/camera_transform.h):
+// a look-at that defines a frame; finite; a rotation, translation, uniform scale or mirror. Each refusal
+// names the file and the line (the LookAt's, else the Camera's).
+TEST(PbrtLoader, CameraTransformFollowsTheSensorRule) {
+  TempDir d("pbrt_camera_rule");
+  const std::string rest = "Camera \"perspective\"\nWorldBegin\n";
+  expectError(d, "LookAt 0 1 5  0 1 5  0 1 0\n" + rest, 1, "origin and target coincide");
+  expectError(d, "LookAt 0 1 5  0 1 0  0 0 1\n" + rest, 1, "'up' is zero or parallel to the viewing direction");
+  expectError(d, "LookAt 0 1 5  0 1 0  0 0 0\n" + rest, 1, "'up' is zero or parallel to the viewing direction");
+  expectError(d, "Scale 0 1 1\n" + rest, 2, "must be a rotation, translation, uniform scale or mirror");
+  expectError(d, "LookAt 0 1 5  0 1 0  0 1 0\nScale 1 2 1\n" + rest, 3, "must be a rotation, translation, uniform scale or mirror");
+  expectError(d, "ConcatTransform [1 0 0 0  0.5 1 0 0  0 0 1 0  0 0 0 1]\n" + rest, 2, "uniform scale");  // sheared
+  expectError(d, "Translate 1e39 0 0\n" + rest, 2, "not finite");  // overflows a float: inf, then NaN
+  expectError(d, "Translate 1e39 0 0\nRotate 10 0 1 0\n" + rest, 3, "not finite");  // inf * 0: NaN
+  expectError(d, "Translate nan 0 0\n" + rest, 1, "nan");
+  // What the rule allows: a mirror and a uniform scale (the bundled scenes' Scale -1 1 1).
+  EXPECT_NO_THROW(loadPbrt(d, "Scale -2 2 2\nLookAt 0 1 5  0 1 0  0 1 0\n" + rest));
+}
+
 TEST(PbrtLoader, ErrorsNameFileLineAndConstruct) {
   TempDir d;
   expectError(d, "Camera \"perspective\"\nWorldBegin\nFrobnicate 1 2\n", 3, "unknown or unsupported directive 'Frobnicate'");

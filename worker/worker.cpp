@@ -37,7 +37,8 @@ WorkerOptions withDefaults(WorkerOptions o) {
 Worker::Worker(WorkerOptions options)
     : opt_(withDefaults(std::move(options))),
       client_(opt_.coordinator),
-      scenes_(opt_.cacheDir, [this](const std::string& hash) { return fetchBundle(hash); }) {}
+      scenes_(opt_.cacheDir, [this](const std::string& hash) { return fetchBundle(hash); }, opt_.cacheMaxBytes),
+      plans_("plans", opt_.planCacheMaxBytes) {}
 
 namespace {
 thread_local bool tFetchedBundle = false;  // set when this thread's scene lookup had to fetch the bundle
@@ -126,19 +127,16 @@ void Worker::heartbeatLoop() {
 }
 
 std::shared_ptr<const JobPlan> Worker::planFor(const std::string& jobId) {
-  {
-    std::lock_guard lock(mu_);
-    if (auto it = plans_.find(jobId); it != plans_.end()) {
-      metrics_.planCacheHits.Increment();
-      return it->second;
-    }
-  }
-  uint64_t bytes = 0;
-  auto plan = std::make_shared<const JobPlan>(client_.plan(jobId, &bytes));
-  metrics_.planCacheMisses.Increment();
-  metrics_.downloadBytes.Increment(double(bytes));
-  std::lock_guard lock(mu_);
-  return plans_.emplace(jobId, plan).first->second;
+  bool fetched = false;
+  auto plan = plans_.get(jobId, [&] {
+    uint64_t bytes = 0;
+    auto p = std::make_shared<const JobPlan>(client_.plan(jobId, &bytes));
+    fetched = true;
+    metrics_.downloadBytes.Increment(double(bytes));
+    return std::pair{std::move(p), bytes};
+  });
+  (fetched ? metrics_.planCacheMisses : metrics_.planCacheHits).Increment();
+  return plan;
 }
 
 void Worker::runTask(Active* a) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "common/farm/farm_types.h"
+#include "common/farm/lru_map.h"
 #include "common/farm/scene_cache.h"
 #include "common/methods/registry.h"
 #include "common/render/render_scene.h"
@@ -32,6 +33,10 @@ struct WorkerOptions {
   ChannelOptions coordinator;
   int threads = 0;          // parallel tasks; 0 = hardware concurrency
   std::string cacheDir;     // scene bundles by hash; default $TMPDIR/mltfarm-worker-cache
+  // Bounds of the caches (common/farm/scene_cache.h): bundles on disk plus built scenes in memory, and job
+  // plans in memory; least recently used entries no running task holds are evicted past them. Both > 0.
+  uint64_t cacheMaxBytes = SceneCache::kDefaultMaxBytes;
+  uint64_t planCacheMaxBytes = 256ull << 20;
   bool drain = false;       // on stop: finish the tasks in hand instead of returning them
   // Finished films the coordinator could not take (it is away) wait here and are uploaded when it answers
   // again (worker/spool.h); default <cacheDir>/spool. At most spoolMaxBytes on disk (0: no spool).
@@ -77,12 +82,12 @@ class Worker {
   SceneCache scenes_;  // bundles by hash on disk, built render scenes in memory
   std::atomic<bool> stop_{false};
   std::atomic<bool> reregister_{false};
-  std::mutex mu_;  // guards workerId_, active_, plans_
+  std::mutex mu_;  // guards workerId_, active_
   std::condition_variable slotFreed_;  // a task stopped computing or finished: lease the next one now
   std::string workerId_;
   double heartbeatSeconds_ = 1;
   std::vector<std::unique_ptr<Active>> active_;
-  std::map<std::string, std::shared_ptr<const JobPlan>> plans_;
+  LruMap<JobPlan> plans_;  // by job id; a plan is in use while a task holds it
   std::unique_ptr<FilmSpool> spool_;    // null when spoolMaxBytes is 0
   std::condition_variable spooled_;     // a film was spooled (guarded by mu_)
   std::unique_ptr<tbb::task_arena> arena_;  // every task's units run here: at most `threads` at once

@@ -1,12 +1,13 @@
 // mltfarm-worker: leases work from a coordinator and runs it on this machine's threads.
 //   mltfarm-worker --coordinator HOST:PORT [--threads T] [--token-file F] [--tls-ca CA.pem [--tls-cert C --tls-key K]]
-//                  [--cache-dir DIR] [--spool-dir DIR] [--spool-max-mb MB] [--metrics-listen HOST:PORT]
+//                  [--cache-dir DIR] [--cache-max-mb MB] [--plan-cache-max-mb MB] [--spool-dir DIR] [--spool-max-mb MB] [--metrics-listen HOST:PORT]
 // The token comes from --token-file or $MLTFARM_TOKEN, never from argv.
 // SIGTERM/SIGINT: stop leasing, return unfinished leases (or finish them with --drain), exit 0.
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 
@@ -35,6 +36,24 @@ int main(int argc, char** argv) {
   app.add_option("--tls-server-name", opt.coordinator.tlsServerName,
                  "name the coordinator's certificate carries, when not the host of --coordinator");
   app.add_option("--cache-dir", opt.cacheDir, "scene cache directory");
+  // Cache bounds in MiB, fractions allowed; there is no "unbounded": 0 or less is refused.
+  const CLI::Validator positiveMb(
+      [](std::string& v) -> std::string {
+        try {
+          if (std::stod(v) > 0) return "";
+        } catch (const std::exception&) {
+        }
+        return "must be a number of MiB greater than 0 (there is no unbounded cache), got '" + v.substr(0, 32) + "'";
+      },
+      "MB>0");
+  double cacheMb = double(opt.cacheMaxBytes >> 20), planCacheMb = double(opt.planCacheMaxBytes >> 20);
+  app.add_option("--cache-max-mb", cacheMb,
+                 "at most this many MiB of scene bundles on disk plus built scenes in memory; least recently used "
+                 "scenes no running task uses are evicted past it (> 0; 0 is refused: no unbounded cache)")
+      ->check(positiveMb)->capture_default_str();
+  app.add_option("--plan-cache-max-mb", planCacheMb,
+                 "at most this many MiB of job plans in memory, evicted like scenes (> 0)")
+      ->check(positiveMb)->capture_default_str();
   app.add_option("--spool-dir", opt.spoolDir,
                  "finished films wait here while the coordinator is away (default: CACHE_DIR/spool)");
   double spoolMb = double(opt.spoolMaxBytes >> 20);
@@ -51,6 +70,8 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", logLevel, "trace|debug|info|warn|error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   opt.spoolMaxBytes = uint64_t(spoolMb * 1048576.0);
+  opt.cacheMaxBytes = std::max<uint64_t>(1, uint64_t(cacheMb * 1048576.0));
+  opt.planCacheMaxBytes = std::max<uint64_t>(1, uint64_t(planCacheMb * 1048576.0));
   spdlog::set_default_logger(spdlog::stderr_color_mt("mltfarm"));  // stdout is for results
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %v");

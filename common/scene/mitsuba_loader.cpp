@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "common/scene/camera_transform.h"
 #include "common/scene/mitsuba_internal.h"
 #include "common/scene/scene_files.h"
 
@@ -233,8 +234,8 @@ void Loader::parseSensor(const XmlElement& el) {
   const double farClip = props.getFloat("far_clip", 1e4);
   if (!(cam.nearClip > 0) || !(farClip > cam.nearClip)) failAt(el, "need 0 < near_clip < far_clip");
   if (auto t = props.optTransform("to_world")) {
-    if (!t->isFinite() || !t->isSimilarity())
-      props.fail(*props.find("to_world"), "a sensor's to_world must be a rotation, translation, uniform scale or mirror");
+    if (const std::string problem = cameraTransformProblem(*t); !problem.empty())
+      props.fail(*props.find("to_world"), "a sensor's to_world " + problem);
     cam.toWorld = *t;
   }
   if (cam.type == CameraDesc::Type::ThinLens) {

@@ -1,6 +1,7 @@
 #include "common/scene/mitsuba_props.h"
 
 #include "common/core/clip.h"
+#include "common/scene/camera_transform.h"
 
 #include <algorithm>
 #include <cctype>
@@ -146,15 +147,9 @@ Transform parseTransformElement(const XmlElement& el) {
         checkAttributes(c, {"origin", "target", "up"});
         const Vec3 o = parseVec3(c, "origin"), t = parseVec3(c, "target");
         Vec3 up;
-        if (c.has("up")) {
-          up = parseVec3(c, "up");
-        } else {
-          const Vec3 d = t - o;
-          if (!(length(d) > 0)) failAt(c, "origin and target coincide");
-          up = Frame(normalize(d)).s;  // Mitsuba 3: any vector orthogonal to the view direction
-        }
-        if (!(length(t - o) > 0)) failAt(c, "origin and target coincide");
-        if (!(length(cross(up, t - o)) > 0)) failAt(c, "'up' is zero or parallel to the viewing direction");
+        if (c.has("up")) up = parseVec3(c, "up");
+        else if (length(t - o) > 0) up = Frame(normalize(t - o)).s;  // Mitsuba 3: any vector orthogonal to the view
+        if (const std::string problem = lookAtProblem(o, t, up); !problem.empty()) failAt(c, problem);
         T = Transform::lookAt(o, t, up);
       } else {
         failAt(c, "unknown transform operation (expected translate, rotate, scale, matrix or lookat)");

@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "common/scene/camera_transform.h"
 #include "common/scene/material_tables.h"
 #include "common/scene/mesh_readers.h"
 #include "common/scene/mesh_utils.h"
@@ -170,11 +171,12 @@ void Loader::directive(const Token& t) {
     gs_.ctm = gs_.ctm * Transform::rotate(axis, v[0]);
   } else if (d == "LookAt") {
     const auto v = readNumbers(9, "LookAt eye look up");
+    const Vec3 eye{float(v[0]), float(v[1]), float(v[2])}, look{float(v[3]), float(v[4]), float(v[5])},
+        up{float(v[6]), float(v[7]), float(v[8])};
+    if (const std::string problem = lookAtProblem(eye, look, up); !problem.empty()) failAt(t, "LookAt: " + problem);
     try {
       // pbrt's LookAt is the world-to-camera inverse of Mitsuba's lookat (same columns: up x dir, up, dir).
-      const Transform camToWorld = Transform::lookAt(Vec3(float(v[0]), float(v[1]), float(v[2])),
-                                                     Vec3(float(v[3]), float(v[4]), float(v[5])),
-                                                     Vec3(float(v[6]), float(v[7]), float(v[8])));
+      const Transform camToWorld = Transform::lookAt(eye, look, up);
       gs_.ctm = gs_.ctm * camToWorld.inverse();
     } catch (const SceneError&) {
       throw;
@@ -346,6 +348,10 @@ void Loader::camera(const Token& where) {
   if (inWorld_) failAt(where, "Camera inside the world block");
   haveCamera_ = true;
   CameraDesc& cam = scene_.camera;
+  // The rule of a Mitsuba sensor's to_world, on the transform current here (world to camera: its inverse
+  // passes or fails alike).
+  if (const std::string problem = cameraTransformProblem(gs_.ctm); !problem.empty())
+    failAt(where, "Camera: the current transform " + problem);
   try {
     namedCoordSys_["camera"] = gs_.ctm.inverse();
     cam.toWorld = gs_.ctm.inverse() * Transform::scale(Vec3(-1, 1, 1));  // pbrt +x right -> our +x left
