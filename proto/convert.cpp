@@ -165,8 +165,9 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     s.chains = int(c.chains());
     requireRange("settings.chains.bootstrap_samples", c.bootstrap_samples(), 0, kMaxBootstrap);  // 0 = automatic
     s.bootstrapSamples = int(c.bootstrap_samples());
-    requireRange("settings.chains.large_step_prob", c.large_step_prob(), 0.0, 1.0);
-    s.largeStepProb = float(c.large_step_prob());
+    // Negative: the method's default (RenderSettings::largeStepProb), resolved by the plan.
+    if (!(c.large_step_prob() < 0)) requireRange("settings.chains.large_step_prob", c.large_step_prob(), 0.0, 1.0);
+    s.largeStepProb = c.large_step_prob() < 0 ? -1.0f : float(c.large_step_prob());
     if (c.kernel() == "kelemen" || c.kernel().empty()) s.kernel = MutationKernel::Kelemen;
     else if (c.kernel() == "gaussian") s.kernel = MutationKernel::Gaussian;
     else throw WireError("settings.chains.kernel", fmt::format("unknown '{}' (kelemen|gaussian)", c.kernel()));

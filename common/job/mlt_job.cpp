@@ -54,9 +54,14 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
   return lengths;
 }
 
+RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
+  if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
+  return s;
+}
+
 KelemenParams kelemenParams(const RenderSettings& s) {
   KelemenParams p;
-  p.largeStepProb = s.largeStepProb;
+  p.largeStepProb = s.largeStepProb < 0 ? 0.3f : s.largeStepProb;  // resolved by the plan before any chain runs
   p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
   p.s1 = s.kelemenS1;
   p.s2 = s.kelemenS2;
@@ -257,7 +262,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*/, const RenderSettings& settings,
                            const MarkovChainBootstrap& bootstrap) {
-  const RenderSettings& s = settings;
+  const RenderSettings s = resolveChainSettings(spec, settings);  // the plan holds the values used
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));

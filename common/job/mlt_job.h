@@ -47,6 +47,8 @@ class ChainJobSpec {
   // kBootstrapShare of the mutations' time, so a count-sized bootstrap (--mutations-per-pixel) holds
   // kBootstrapShare * M / candidateCost candidates, as a --time budget sizes it by measured throughput.
   // 1: a candidate is one evaluation of the chain's own target (pssmlt, pssmlt-bdpt, mmlt, rjmlt).
+  // The large-step probability when the settings leave it to the method (largeStepProb < 0).
+  virtual float defaultLargeStepProb() const { return 0.3f; }
   virtual double candidateCost(const RenderSettings& settings) const {
     (void)settings;
     return 1.0;
@@ -109,8 +111,11 @@ uint32_t allocationBin(Vec2 pRaster, int width, int height);
 // Weights per bootstrap length (boot.lengths order); empty if the bootstrap is not binned or has one length
 // (then the allocation is proportional to b_k).
 std::vector<double> allocationWeights(const BootstrapResult& boot);
-// The chain's sample-source parameters from the settings (large-step probability, kernel).
+// The chain's sample-source parameters from the settings (large-step probability, kernel; a large-step
+// probability left to the method reads as its default, as resolveChainSettings gives it).
 KelemenParams kelemenParams(const RenderSettings& settings);
+// The settings with the method's defaults filled in where they were left to it (largeStepProb < 0).
+RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings settings);
 // The path lengths a job's chains cover ({-1} without chains per length; kMin..maxDepth with them; with
 // unlimited depth the first block, to which the bootstrap adds).
 std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& settings);

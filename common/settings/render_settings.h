@@ -48,7 +48,9 @@ struct RenderSettings {
   // The bootstrap only finds start states and allocates chains to lengths: b is refined by the chains'
   // large steps (mlt/develop.h (D3)).
   int bootstrapSamples = 0;
-  float largeStepProb = 0.3f;
+  // Large-step probability; negative (kMethodDefaultLargeStep): the method's default, resolved when the job
+  // is planned (ChainJobSpec::defaultLargeStepProb: 0.3; rjmlt 0.1), and the plan holds the value used.
+  float largeStepProb = -1.0f;
   MutationKernel kernel = MutationKernel::Kelemen;
   float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
   MltSplatting splatting = MltSplatting::ExpectedValue;

@@ -29,7 +29,7 @@ struct EvalCliOptions {
   std::string out, reference, refMethod = "bdpt", injectOutlier, python = "/usr/bin/python3";
   int runs = 3, threads = 0, width = 0, height = 0, maxDepth = 0, rrDepth = 0, refSpp = 1024, refParts = 4;
   int chains = 0, bootstrap = 0;
-  float largeStep = 0.3f;
+  float largeStep = -1.0f;  // the method's default
   std::string kernel = "kelemen";
   float s1 = 1.0f / 1024, s2 = 1.0f / 64, sigma = 0.01f;  // RenderSettings' defaults (see settings_options.h)
   double eps = 1e-2, outlierRatio = 4, biasAlpha = 1e-3, minBias = 0.01;
@@ -69,9 +69,10 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
         s.height, s.integrator.maxDepth, s.integrator.rrDepth);
     if (isMarkovChainMethod(s.method))
       cmd += fmt::format(
-          " --mutations-per-pixel {:.17g} --bootstrap {} --large-step {} --chains {} --kernel {} --s1 {} "
+          " --mutations-per-pixel {:.17g} --bootstrap {}{} --chains {} --kernel {} --s1 {} "
           "--s2 {} --sigma {}",
-          s.mutationsPerPixel, s.bootstrapSamples, s.largeStepProb, s.chains,
+          s.mutationsPerPixel, s.bootstrapSamples,
+          s.largeStepProb >= 0 ? fmt::format(" --large-step {}", s.largeStepProb) : std::string(), s.chains,
           s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen", s.kelemenS1, s.kelemenS2, s.gaussianSigma);
     else
       cmd += fmt::format(" --spp {}", s.spp);
@@ -183,7 +184,8 @@ CommandRun setupEval(CLI::App& sub) {
   sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 4% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  sub.add_option("--large-step", o->largeStep, "Large-step probability")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  sub.add_option("--large-step", o->largeStep, "Large-step probability (default: each method's, 0.3; rjmlt 0.1)")
+      ->check(CLI::Range(0.0, 1.0));
   sub.add_option("--kernel", o->kernel,
                  "Markov chain methods: small-step kernel, kelemen (exponential, --s1/--s2) or gaussian (--sigma)")
       ->capture_default_str()
@@ -275,7 +277,8 @@ CommandRun setupEval(CLI::App& sub) {
       std::string budgets;
       for (double b : o->budgets) budgets += (budgets.empty() ? "" : ",") + fmt::format("{:g}", b);
       // The Markov chain parameters always (their defaults may change); the others when given.
-      std::string chain = fmt::format(" --large-step {} --kernel {}", o->largeStep, o->kernel);
+      std::string chain = o->largeStep >= 0 ? fmt::format(" --large-step {}", o->largeStep) : std::string();
+      chain += fmt::format(" --kernel {}", o->kernel);
       if (o->kernel == "gaussian")
         chain += fmt::format(" --sigma {}", o->sigma);
       else

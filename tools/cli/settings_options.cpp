@@ -46,8 +46,8 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
   add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 4% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  add_option("--large-step", largeStep_, "Markov chain methods: large-step probability")
-      ->capture_default_str()
+  add_option("--large-step", largeStep_,
+             "Markov chain methods: large-step probability (default: the method's, 0.3; rjmlt 0.1)")
       ->check(CLI::Range(0.0, 1.0));
   add_option("--kernel", kernel_,
              "Markov chain methods: small-step kernel, kelemen (exponential, --s1/--s2) or gaussian (--sigma)")

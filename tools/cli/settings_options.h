@@ -50,7 +50,7 @@ class RenderSettingsOptions : public CLI::Option_group {
   int spp_ = 16, samplesPerUnit_ = 0, width_ = 0, height_ = 0, maxDepth_ = 0, rrDepth_ = 0;
   int chains_ = 0, bootstrap_ = 0;
   double mutationsPerPixel_ = 16;
-  float largeStep_ = 0.3f;
+  float largeStep_ = -1.0f;  // the method's default
   float s1_ = 1.0f / 1024, s2_ = 1.0f / 64, sigma_ = 0.01f;
   bool separateDirect_ = false;
   uint64_t seed_ = 1;
