@@ -312,6 +312,8 @@ v1::ChainStats toProto(const ChainStats& s) {
   for (uint64_t v : s.proposedPerKind) p.add_proposed_per_kind(v);
   for (uint64_t v : s.acceptedPerKind) p.add_accepted_per_kind(v);
   for (double v : s.secondsPerKind) p.add_seconds_per_kind(v);
+  for (uint64_t v : s.proposedPerLengthKind) p.add_proposed_per_length_kind(v);
+  for (uint64_t v : s.acceptedPerLengthKind) p.add_accepted_per_length_kind(v);
   for (const TargetSums& t : s.largeStepSums) *p.add_large_step_sums() = toProto(t);
   return p;
 }
@@ -329,6 +331,14 @@ ChainStats fromProto(const v1::ChainStats& p) {
   s.proposedPerKind.assign(p.proposed_per_kind().begin(), p.proposed_per_kind().end());
   s.acceptedPerKind.assign(p.accepted_per_kind().begin(), p.accepted_per_kind().end());
   s.secondsPerKind.assign(p.seconds_per_kind().begin(), p.seconds_per_kind().end());
+  if (p.proposed_per_length_kind_size() % ChainStats::kKindStride != 0 ||
+      p.accepted_per_length_kind_size() > p.proposed_per_length_kind_size() ||
+      p.proposed_per_length_kind_size() > p.proposed_per_length_size() * int(ChainStats::kKindStride))
+    throw WireError("stats.proposed_per_length_kind",
+                    fmt::format("{} values for {} path lengths: {} per length expected", p.proposed_per_length_kind_size(),
+                                p.proposed_per_length_size(), ChainStats::kKindStride));
+  s.proposedPerLengthKind.assign(p.proposed_per_length_kind().begin(), p.proposed_per_length_kind().end());
+  s.acceptedPerLengthKind.assign(p.accepted_per_length_kind().begin(), p.accepted_per_length_kind().end());
   for (const auto& t : p.large_step_sums()) s.largeStepSums.push_back(fromProto(t, "stats.large_step_sums"));
   return s;
 }

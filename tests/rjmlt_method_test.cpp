@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "common/integrators/evaluators.h"
+#include "common/methods/chain_report.h"
+#include "common/methods/image_metadata.h"
 #include "common/methods/registry.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
@@ -68,6 +70,58 @@ TEST(RjmltMethod, LargeStepDefaultIsTheMethodsAndThePlanHoldsIt) {
   EXPECT_NO_THROW(findMethod("rjmlt").validate(s));
   s.params["technique-step"] = "0.95";  // 0.1 + 0.95 > 1
   EXPECT_THROW(findMethod("rjmlt").validate(s), std::invalid_argument);
+}
+
+// Acceptance per mutation kind per path length (the issue: "per-kind acceptance statistics per path
+// length"): every chain counts its kinds in its length's slot; the merged counts sum over the chains, reach
+// the image metadata (techniqueSteps<k>, acceptanceTechnique<k>, ...) and read back, and the per-length
+// kinds add up to the per-length and per-kind totals. No technique change at length 1 (one technique).
+TEST(RjmltMethod, AcceptancePerKindPerPathLengthReachesTheMetadata) {
+  const auto scene = RenderScene::build(test::smallCornellBox(8, 8));
+  RenderSettings s;
+  s.method = "rjmlt";
+  s.integrator.maxDepth = 4;
+  s.mutationsPerPixel = 64;
+  s.chains = 8;
+  s.bootstrapSamples = 2048;
+  s.params["technique-step"] = "0.2";
+  const JobPlan plan = planJob(*scene, s);
+  PartialResult merged;
+  std::vector<uint64_t> byLengthKind;
+  for (const WorkUnit& u : plan.units) {
+    const PartialResult r = runWorkUnit(*scene, plan, u);
+    for (size_t i = 0; i < r.stats.proposedPerLengthKind.size(); ++i) {
+      if (byLengthKind.size() <= i) byLengthKind.resize(i + 1, 0);
+      byLengthKind[i] += r.stats.proposedPerLengthKind[i];
+    }
+    merged.add(r);
+  }
+  ASSERT_EQ(merged.stats.proposedPerLengthKind, byLengthKind);
+  const size_t stride = ChainStats::kKindStride;
+  uint64_t technique = 0;
+  for (size_t k = 1; k < merged.stats.proposedPerLength.size(); ++k) {
+    uint64_t sum = 0;
+    for (size_t kind = 0; kind < 3; ++kind) sum += merged.stats.proposedPerLengthKind[k * stride + kind];
+    EXPECT_EQ(sum, merged.stats.proposedPerLength[k]) << "length " << k;
+    technique += merged.stats.proposedPerLengthKind[k * stride + 2];
+  }
+  EXPECT_EQ(technique, merged.stats.proposedPerKind[2]);
+  const ImageMetadata m = imageMetadata(plan, merged, "test scene", "0");
+  EXPECT_EQ(m.numbers.count("techniqueSteps1"), 0u);  // one technique at length 1: nothing to change
+  ASSERT_TRUE(m.numbers.count("techniqueSteps3") && m.numbers.count("acceptanceTechnique3"));
+  EXPECT_EQ(m.numbers.at("techniqueSteps3"), double(merged.stats.proposedPerLengthKind[3 * stride + 2]));
+  EXPECT_GT(m.numbers.at("acceptanceTechnique3"), 0.5);  // the jumps keep the path: nearly always accepted
+  const ChainReport back = chainReportFromMetadata(m);
+  bool found = false;
+  for (const ChainLengthReport& l : back.lengths)
+    if (l.k == 3) {
+      found = true;
+      ASSERT_EQ(l.kinds.size(), 3u);
+      EXPECT_EQ(l.kinds[2].first, merged.stats.proposedPerLengthKind[3 * stride + 2]);
+      EXPECT_EQ(l.kinds[2].second, m.numbers.at("acceptanceTechnique3"));
+    }
+  EXPECT_TRUE(found);
+  EXPECT_NE(formatChainSummary(back, 1, 1).find("technique "), std::string::npos) << formatChainSummary(back, 1, 1);
 }
 
 RenderSettings settings(const std::string& method, int maxDepth, double mutationsPerPixel = 48, int chains = 12) {

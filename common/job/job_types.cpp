@@ -21,6 +21,8 @@ void ChainStats::add(const ChainStats& o) {
   addVectors(acceptedPerLength, o.acceptedPerLength);
   addVectors(proposedPerKind, o.proposedPerKind);
   addVectors(acceptedPerKind, o.acceptedPerKind);
+  addVectors(proposedPerLengthKind, o.proposedPerLengthKind);
+  addVectors(acceptedPerLengthKind, o.acceptedPerLengthKind);
   addVectors(secondsPerKind, o.secondsPerKind);
   addPerSlot(largeStepSums, o.largeStepSums);
 }

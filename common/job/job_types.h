@@ -53,6 +53,9 @@ struct JobPlan {
 struct ChainStats {              // sums, so they merge by addition
   std::vector<uint64_t> proposedPerLength, acceptedPerLength;  // index = path length (pssmlt: index 0)
   std::vector<uint64_t> proposedPerKind, acceptedPerKind;  // index = mutation kind (the method's mutationKinds())
+  // Per path-length slot and kind: index = slot * kKindStride + kind (rjmlt's technique changes per length).
+  static constexpr size_t kKindStride = 8;  // = kMaxMutationKinds (common/mlt/chain.h)
+  std::vector<uint64_t> proposedPerLengthKind, acceptedPerLengthKind;
   // Wall time spent in each kind's steps, summed over chains (chain.h kMoveTimingStride: an estimate from
   // sampled steps). Informational, like PartialResult::seconds: never part of the image.
   std::vector<double> secondsPerKind;

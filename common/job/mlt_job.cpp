@@ -404,9 +404,14 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   st.proposedPerKind.assign(counts.proposed, counts.proposed + kinds);
   st.acceptedPerKind.assign(counts.accepted, counts.accepted + kinds);
   st.secondsPerKind.assign(counts.seconds, counts.seconds + kinds);
+  static_assert(ChainStats::kKindStride == size_t(kMaxMutationKinds));
+  st.proposedPerLengthKind.assign((slot + 1) * ChainStats::kKindStride, 0);
+  st.acceptedPerLengthKind.assign((slot + 1) * ChainStats::kKindStride, 0);
   for (size_t kind = 0; kind < kinds; ++kind) {
     st.proposedPerLength[slot] += counts.proposed[kind];
     st.acceptedPerLength[slot] += counts.accepted[kind];
+    st.proposedPerLengthKind[slot * ChainStats::kKindStride + kind] = counts.proposed[kind];
+    st.acceptedPerLengthKind[slot * ChainStats::kKindStride + kind] = counts.accepted[kind];
   }
   st.largeStepSums.assign(slot + 1, TargetSums{});
   st.largeStepSums[slot] = counts.largeSteps;

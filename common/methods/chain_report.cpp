@@ -103,6 +103,13 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
       l.chains = size_t(k) < chainsPerSlot.size() ? chainsPerSlot[size_t(k)] : 0;
       l.mutations = size_t(k) < proposed.size() ? proposed[size_t(k)] : 0;
       l.acceptance = ratio(size_t(k) < accepted.size() ? accepted[size_t(k)] : 0, l.mutations);
+      const auto& PK = merged.stats.proposedPerLengthKind;
+      const auto& AK = merged.stats.acceptedPerLengthKind;
+      for (size_t kind = 0; kind < names.size(); ++kind) {
+        const size_t i = size_t(k) * ChainStats::kKindStride + kind;
+        const uint64_t p = i < PK.size() ? PK[i] : 0;
+        l.kinds.push_back({p, ratio(i < AK.size() ? AK[i] : 0, p)});
+      }
       r.lengths.push_back(l);
     }
   }
@@ -146,6 +153,11 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
     m.numbers["chains" + k] = double(l.chains);
     m.numbers["mutations" + k] = double(l.mutations);
     m.numbers["acceptance" + k] = l.acceptance;
+    for (size_t kind = 0; kind < l.kinds.size() && kind < r.kinds.size(); ++kind) {
+      if (l.kinds[kind].first == 0) continue;  // e.g. no technique change at length 1 (one technique)
+      m.numbers[r.kinds[kind].name + "Steps" + k] = double(l.kinds[kind].first);
+      m.numbers["acceptance" + capitalized(r.kinds[kind].name) + k] = l.kinds[kind].second;
+    }
   }
 }
 
@@ -201,6 +213,8 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
     l.chains = uint64_t(number(m, "chains" + ks));
     l.mutations = uint64_t(number(m, "mutations" + ks));
     l.acceptance = number(m, "acceptance" + ks);
+    for (const MutationKindReport& kind : r.kinds)
+      l.kinds.push_back({uint64_t(number(m, kind.name + "Steps" + ks)), number(m, "acceptance" + capitalized(kind.name) + ks)});
     r.lengths.push_back(l);
   }
   std::sort(r.lengths.begin(), r.lengths.end(), [](const auto& a, const auto& b) { return a.k < b.k; });
@@ -217,10 +231,17 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
   else
     out += r.steps("large") > 0 ? " + the chains' large steps)\n" : " + the chains' independent samples)\n";
   if (!r.lengths.empty()) {
-    out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}\n", "k", "b_k ± SE", "chains", "mutations", "acceptance");
-    for (const ChainLengthReport& l : r.lengths)
-      out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>9.1f}%\n", l.k,
-                         fmt::format("{:.6g} ± {:.2g}", l.bk, l.bkStdErr), l.chains, l.mutations, 100 * l.acceptance);
+    out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}  {}\n", "k", "b_k ± SE", "chains", "mutations",
+                       "acceptance", "by kind");
+    for (const ChainLengthReport& l : r.lengths) {
+      std::string byKind;
+      for (size_t kind = 0; kind < l.kinds.size() && kind < r.kinds.size(); ++kind)
+        if (l.kinds[kind].first > 0)
+          byKind += fmt::format("{}{} {:.1f}%", byKind.empty() ? "" : ", ", r.kinds[kind].name, 100 * l.kinds[kind].second);
+      out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>9.1f}%  {}\n", l.k,
+                         fmt::format("{:.6g} ± {:.2g}", l.bk, l.bkStdErr), l.chains, l.mutations, 100 * l.acceptance,
+                         byKind);
+    }
   }
   if (r.hasAcceptance) {
     std::string kinds;

@@ -36,6 +36,7 @@ struct ChainLengthReport {
   double bk = 0, bkStdErr = 0;
   uint64_t chains = 0, mutations = 0;
   double acceptance = 0;  // accepted / proposed of chains of this length
+  std::vector<std::pair<uint64_t, double>> kinds;  // per mutation kind (ChainReport::kinds order): proposed, acceptance
 };
 
 struct MutationKindReport {
