@@ -73,6 +73,7 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
   HeartbeatReply heartbeat(const std::string& workerId, const std::vector<std::string>& leaseIds) override;
   std::vector<BundleFile> scene(const std::string& sceneHash) override;
   JobPlan plan(const std::string& jobId) override;
+  std::shared_ptr<const JobPlan> sharedPlan(const std::string& jobId) override;
   void admitUpload(const UploadAnnouncement& a) override;
   UploadReply upload(const std::string& workerId, const std::string& leaseId, const std::string& jobId,
                      uint32_t taskIndex, PartialResult result) override;

@@ -2,6 +2,7 @@
 // (coordinator/service.h) do transport only and call these; tests can drive a fake.
 #pragma once
 #include <chrono>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,10 @@ class WorkerHandler {
   // The bundle's files (NotFound for an unknown hash).
   virtual std::vector<BundleFile> scene(const std::string& sceneHash) = 0;
   virtual JobPlan plan(const std::string& jobId) = 0;
+  // The same plan, shared rather than copied (FetchPlan cuts a page from it per call). The default copies.
+  virtual std::shared_ptr<const JobPlan> sharedPlan(const std::string& jobId) {
+    return std::make_shared<const JobPlan>(plan(jobId));
+  }
   // Throws FarmError unless the announced upload may be read: the worker holds the live lease of that
   // task and the film has the job's size. The default admits everything (transport tests' fakes).
   virtual void admitUpload(const UploadAnnouncement&) {}

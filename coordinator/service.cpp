@@ -17,6 +17,7 @@
 #include "coordinator/coordinator.h"  // formatJobId / parseJobId (ListJobs page tokens)
 #include "proto/farm_convert.h"
 #include "proto/sparse_film.h"
+#include "proto/plan_pages.h"
 #include "proto/mltfarm.grpc.pb.h"
 
 namespace mlt::farm {
@@ -259,7 +260,12 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
   Status FetchPlan(ServerContext* ctx, const v1::FetchPlanRequest* req, v1::JobPlan* resp) override {
     return guarded(ctx, token_, "FetchPlan", [&] {
       wire::checkVersion(req->format_version(), "FetchPlanRequest");
-      *resp = wire::toProto(h_.plan(req->job_id()));
+      // A page of units (proto/plan_pages.h): a whole plan of many units exceeds the 4 MiB reply limit.
+      try {
+        *resp = wire::planPage(*h_.sharedPlan(req->job_id()), req->first_unit(), req->max_units());
+      } catch (const wire::PlanPageRangeError& e) {
+        return Status(StatusCode::OUT_OF_RANGE, e.what());
+      }
       return Status::OK;
     });
   }

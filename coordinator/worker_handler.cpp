@@ -170,11 +170,13 @@ std::vector<BundleFile> Coordinator::scene(const std::string& sceneHash) {
   return readBundle(dir);
 }
 
-JobPlan Coordinator::plan(const std::string& jobId) {
+JobPlan Coordinator::plan(const std::string& jobId) { return *sharedPlan(jobId); }
+
+std::shared_ptr<const JobPlan> Coordinator::sharedPlan(const std::string& jobId) {
   std::lock_guard lock(mu_);
   Job& job = findJob(jobId);
   if (!job.plan) throw FarmError(Code::FailedPrecondition, fmt::format("job {} has no plan yet", jobId));
-  return *job.plan;
+  return job.plan;
 }
 
 bool Coordinator::taskAttemptFailed(Job& job, uint32_t task, const std::string& reason) {

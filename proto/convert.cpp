@@ -33,6 +33,9 @@ void requireRange(const char* field, double v, double lo, double hi, bool loOpen
     throw WireError(field, fmt::format("{} is out of range {}{}, {}]", v, loOpen ? "(" : "[", lo, hi));
 }
 
+
+}  // namespace
+
 std::string deterministicBytes(const google::protobuf::MessageLite& m) {
   std::string out;
   {
@@ -43,8 +46,6 @@ std::string deterministicBytes(const google::protobuf::MessageLite& m) {
   }
   return out;
 }
-
-}  // namespace
 
 void checkVersion(uint32_t version, const char* message) {
   if (version != kFormatVersion)
@@ -273,6 +274,9 @@ JobPlan fromProto(const v1::JobPlan& p) {
       if (!(std::isfinite(v) && v >= 0)) throw WireError("plan.norm.bootstrap_b", fmt::format("invalid value {}", v));
     plan.norm.bootstrapB.push_back({e.n(), e.b(), e.std_err(), e.sample_var()});
   }
+  if (p.total_units() != 0 && p.total_units() != uint32_t(p.units_size()))  // a page, not a whole plan
+    throw WireError("plan.total_units", fmt::format("{} units in a plan of {}: a page (proto/plan_pages.h)",
+                                                    p.units_size(), p.total_units()));
   plan.units.reserve(p.units_size());
   for (int i = 0; i < p.units_size(); ++i) {
     const auto& w = p.units(i);

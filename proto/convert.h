@@ -82,6 +82,7 @@ std::string serializePartial(const PartialResult& r, bool zeroRuns = false);
 PartialResult parsePartial(const std::string& blob);
 
 std::string jobPlanBytes(const JobPlan& plan);           // deterministic serialization
+std::string deterministicBytes(const google::protobuf::MessageLite& m);  // maps in key order
 JobPlan parseJobPlan(const std::string& bytes);
 
 }  // namespace mlt::wire

@@ -6,6 +6,7 @@
 
 #include "common/farm/bundle.h"
 #include "proto/convert.h"
+#include "proto/plan_pages.h"
 #include "proto/sparse_film.h"
 
 namespace mlt::farm {
@@ -75,16 +76,21 @@ std::vector<BundleFile> fetchScene(v1::WorkerService::Stub& stub, const ChannelO
 
 JobPlan fetchPlan(v1::WorkerService::Stub& stub, const ChannelOptions& o, const std::string& jobId,
                   uint64_t* bytes) {
-  grpc::ClientContext ctx;
-  prepareContext(ctx, o, std::chrono::seconds(60));
-  v1::FetchPlanRequest req;
-  req.set_format_version(wire::kFormatVersion);
-  req.set_job_id(jobId);
-  v1::JobPlan resp;
-  grpc::Status s = stub.FetchPlan(&ctx, req, &resp);
-  if (!s.ok()) throw RpcError(s.error_code(), "FetchPlan", s.error_message());
-  if (bytes) *bytes = resp.ByteSizeLong();
-  return wire::fromProto(resp);
+  // Page by page (the server's default page): a plan of many units exceeds the 4 MiB reply limit.
+  return wire::assemblePlanPages(
+      [&](uint32_t firstUnit) {
+        grpc::ClientContext ctx;
+        prepareContext(ctx, o, std::chrono::seconds(60));
+        v1::FetchPlanRequest req;
+        req.set_format_version(wire::kFormatVersion);
+        req.set_job_id(jobId);
+        req.set_first_unit(firstUnit);
+        v1::JobPlan page;
+        grpc::Status s = stub.FetchPlan(&ctx, req, &page);
+        if (!s.ok()) throw RpcError(s.error_code(), "FetchPlan", s.error_message());
+        return page;
+      },
+      bytes);
 }
 
 }  // namespace mlt::farm
