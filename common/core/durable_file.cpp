@@ -26,28 +26,24 @@ std::string parentOf(const std::string& path) {
   return dir.empty() ? "." : dir;
 }
 
-void syncFile(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail(path, "open for fsync", errno);
+// open(path, O_RDONLY | extraFlags), fsync, close; errors name the step (openWhat / syncWhat).
+void openAndSync(const std::string& path, int extraFlags, const char* openWhat, const char* syncWhat) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | extraFlags);
+  if (fd < 0) fail(path, openWhat, errno);
   if (::fsync(fd) != 0) {
     const int err = errno;
     ::close(fd);
-    fail(path, "fsync", err);
+    fail(path, syncWhat, err);
   }
   ::close(fd);
 }
 
+void syncFile(const std::string& path) { openAndSync(path, 0, "open for fsync", "fsync"); }
+
 }  // namespace
 
 void syncDirectory(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) fail(dir, "open the directory for fsync", errno);
-  if (::fsync(fd) != 0) {
-    const int err = errno;
-    ::close(fd);
-    fail(dir, "fsync the directory", err);
-  }
-  ::close(fd);
+  openAndSync(dir, O_DIRECTORY, "open the directory for fsync", "fsync the directory");
 }
 
 void writeFileDurably(const std::string& path, std::string_view data, mode_t mode) {
