@@ -61,7 +61,7 @@ RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) 
 
 KelemenParams kelemenParams(const RenderSettings& s) {
   KelemenParams p;
-  p.largeStepProb = s.largeStepProb < 0 ? 0.3f : s.largeStepProb;  // resolved by the plan before any chain runs
+  p.largeStepProb = s.largeStepProb;
   p.kernel = s.kernel == MutationKernel::Gaussian ? SmallStepKernel::Gaussian : SmallStepKernel::Kelemen;
   p.s1 = s.kelemenS1;
   p.s2 = s.kelemenS2;

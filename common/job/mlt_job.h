@@ -111,8 +111,8 @@ uint32_t allocationBin(Vec2 pRaster, int width, int height);
 // Weights per bootstrap length (boot.lengths order); empty if the bootstrap is not binned or has one length
 // (then the allocation is proportional to b_k).
 std::vector<double> allocationWeights(const BootstrapResult& boot);
-// The chain's sample-source parameters from the settings (large-step probability, kernel; a large-step
-// probability left to the method reads as its default, as resolveChainSettings gives it).
+// The chain's sample-source parameters from resolved settings (large-step probability, kernel; a
+// large-step probability still left to the method is refused by KelemenSource: resolveChainSettings first).
 KelemenParams kelemenParams(const RenderSettings& settings);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0).
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings settings);

@@ -22,7 +22,7 @@ void PrimarySampleChainMethod::validate(const RenderSettings& s) const {
                                 " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
   if (s.separateDirect && s.spp < 1)
     throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1, got " + std::to_string(s.spp));
-  KelemenSource kernel(kelemenParams(s), 0, 0, 0);  // throws on bad kernel parameters
+  KelemenSource kernel(kelemenParams(resolveChainSettings(*this, s)), 0, 0, 0);  // throws on bad kernel parameters
   chainPathLengths(*this, s);                        // chains per length: a valid max depth
 }
 

@@ -43,7 +43,7 @@ std::vector<ParamSpec> RjmltMethod::params() const {
 void RjmltMethod::validate(const RenderSettings& settings) const {
   PrimarySampleChainMethod::validate(settings);
   const double pTechnique = param(settings, "technique-step");
-  const double pLarge = settings.largeStepProb < 0 ? defaultLargeStepProb() : settings.largeStepProb;
+  const double pLarge = resolveChainSettings(*this, settings).largeStepProb;
   if (!(pLarge + pTechnique <= 1))
     throw std::invalid_argument("settings: rjmlt's large-step (" + std::to_string(pLarge) +
                                 ") and technique-step (" + std::to_string(pTechnique) + ") probabilities sum to more than 1");
@@ -62,7 +62,7 @@ std::unique_ptr<ChainState> RjmltMethod::makeChainState(KelemenSource& source, c
   auto* t = dynamic_cast<RjmltTarget*>(&target);
   if (!t) throw std::logic_error("rjmlt: the chain's target is not rjmlt's");
   RjmltSettings rs;
-  rs.largeStepProb = settings.largeStepProb < 0 ? defaultLargeStepProb() : settings.largeStepProb;  // as the plan resolved it
+  rs.largeStepProb = settings.largeStepProb;  // the plan's, resolved (resolveChainSettings)
   rs.techniqueProb = param(settings, "technique-step");
   auto state = std::make_unique<RjmltState>(t->scene(), source, pathLength, t->heuristic(), rs,
                                             chainRng(source.jobSeed(), source.chainIndex(), 2));
