@@ -8,9 +8,11 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <vector>
 
 #include "common/core/sha256.h"
 #include "common/io/exr_io.h"
+#include "tools/eval/metrics.h"
 
 namespace {
 
@@ -31,15 +33,17 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    std::vector<mlt::ExrImage> images;
     std::string digests[2];
     for (int i = 1; i < argc; ++i) {
-      const mlt::ExrImage img = mlt::readExr(argv[i]);
+      images.push_back(mlt::readExr(argv[i]));
+      const mlt::ExrImage& img = images.back();
       digests[i - 1] = pixelDigest(img);
       std::printf("%s: %dx%d pixels sha256 %s, %zu metadata keys\n", argv[i], img.width, img.height,
                   digests[i - 1].c_str(), img.metadata.numbers.size() + img.metadata.strings.size());
     }
     if (argc == 2) {
-      const mlt::ExrImage img = mlt::readExr(argv[1]);
+      const mlt::ExrImage& img = images[0];
       double sum[3] = {0, 0, 0};
       for (const mlt::Color& c : img.rgb) {
         sum[0] += c.r;
@@ -55,20 +59,11 @@ int main(int argc, char** argv) {
     if (argc == 3) {
       const bool same = digests[0] == digests[1];
       std::printf("pixels %s\n", same ? "identical" : "DIFFER");
-      const mlt::ExrImage a = mlt::readExr(argv[1]), r = mlt::readExr(argv[2]);
+      const mlt::ExrImage &a = images[0], &r = images[1];
       if (!same && a.rgb.size() == r.rgb.size() && !a.rgb.empty()) {
-        // The evaluation harness's metric (tools/eval/metrics.h), B taken as the reference.
-        double rel = 0, meanA = 0, meanR = 0;
-        for (size_t i = 0; i < a.rgb.size(); ++i) {
-          const float x[3] = {a.rgb[i].r, a.rgb[i].g, a.rgb[i].b}, y[3] = {r.rgb[i].r, r.rgb[i].g, r.rgb[i].b};
-          for (int c = 0; c < 3; ++c) {
-            rel += (double(x[c]) - y[c]) * (double(x[c]) - y[c]) / (double(y[c]) * y[c] + 0.01);
-            meanA += x[c];
-            meanR += y[c];
-          }
-        }
-        std::printf("relMSE %.6g brightness %+.4f%%\n", rel / (3.0 * double(a.rgb.size())),
-                    100 * (meanA / meanR - 1));
+        // The evaluation harness's metrics, B taken as the reference.
+        const mlt::eval::ImageMetrics m = mlt::eval::computeMetrics(a.rgb, r.rgb, 0.01);
+        std::printf("relMSE %.6g brightness %+.4f%%\n", m.relMSE, 100 * m.meanErr);
       }
       return same ? 0 : 1;
     }
