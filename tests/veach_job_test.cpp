@@ -50,6 +50,8 @@ TEST(VeachJob, ChainsArePureFunctionsOfSeedAndIndex) {
   for (const WorkUnit& u : plan.units) {
     PartialResult a = veach::runVeachChain(*scene, plan, u, mut);
     PartialResult b = veach::runVeachChain(*scene, plan, u, mut);
+    a.foldSplats();
+    b.foldSplats();
     EXPECT_TRUE(sameFilm(a.film, b.film)) << "chain " << u.index;
     EXPECT_EQ(a.stats.acceptedPerKind, b.stats.acceptedPerKind);
     // Every mutation counted once, per kind and in the path-length slot develop reads.
@@ -63,6 +65,8 @@ TEST(VeachJob, ChainsArePureFunctionsOfSeedAndIndex) {
   // Different chains differ.
   PartialResult c0 = veach::runVeachChain(*scene, plan, plan.units[0], mut);
   PartialResult c1 = veach::runVeachChain(*scene, plan, plan.units[1], mut);
+  c0.foldSplats();
+  c1.foldSplats();
   EXPECT_FALSE(sameFilm(c0.film, c1.film));
 }
 
@@ -92,8 +96,10 @@ TEST(VeachJob, StartCandidateWithoutPathFallsBackToResampledStart) {
   WorkUnit u = plan.units[0];
   u.startCandidate = dead;
   u.startContribution = 0;
-  const PartialResult a = veach::runVeachChain(*scene, plan, u, veach::MutationSettings{});
+  PartialResult a = veach::runVeachChain(*scene, plan, u, veach::MutationSettings{});
   PartialResult b = veach::runVeachChain(*scene, plan, u, veach::MutationSettings{});
+  a.foldSplats();
+  b.foldSplats();
   EXPECT_EQ(a.samples, u.mutations);
   PartialResult a2 = a;
   EXPECT_TRUE(sameFilm(a2.film, b.film));

@@ -7,20 +7,6 @@
 
 namespace mlt {
 
-namespace {
-
-// Index of the pixel containing pRaster, or -1 when it lies off the film (or is not a number).
-long pixelIndex(Vec2 pRaster, int width, int height) {
-  const float fx = std::floor(pRaster.x), fy = std::floor(pRaster.y);
-  // Written so that NaN coordinates fail the test too.
-  if (!(fx >= 0.f && fy >= 0.f && fx < float(width) && fy < float(height))) return -1;
-  const int x = static_cast<int>(fx), y = static_cast<int>(fy);
-  if (x >= width || y >= height) return -1;  // guard against float rounding at the far edge
-  return long(y) * width + x;
-}
-
-}  // namespace
-
 Film::Film(int width, int height) : width_(width), height_(height) {
   if (width <= 0 || height <= 0)
     throw std::invalid_argument("Film: size must be positive, got " + std::to_string(width) + "x" +
@@ -53,7 +39,7 @@ void Film::addSample(Vec2 pRaster, const Color& L) {
     ++nonFinite_;
     return;
   }
-  const long i = pixelIndex(pRaster, width_, height_);
+  const long i = filmPixelIndex(pRaster, width_, height_);
   if (i < 0) return;
   pixelSum_[i].add(L);
   pixelCount_[i] += 1.0;
@@ -64,7 +50,7 @@ void Film::addSplat(Vec2 pRaster, const Color& v, size_t layer) {
     ++nonFinite_;
     return;
   }
-  const long i = pixelIndex(pRaster, width_, height_);
+  const long i = filmPixelIndex(pRaster, width_, height_);
   if (i < 0) return;
   std::vector<RGBd>& buffer = layer == 0 ? splat_[0] : splatLayer(layer);
   buffer[i].add(v);

@@ -17,6 +17,7 @@
 // Accumulation order matters for bit-identical results: merge() adds another film element-wise, and
 // callers merge in a fixed order (chain index) to make the sums independent of scheduling.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,6 +32,17 @@ struct RGBd {
   void add(const Color& c) { r += c.r; g += c.g; b += c.b; }
   RGBd& operator+=(const RGBd& o) { r += o.r; g += o.g; b += o.b; return *this; }
 };
+
+// Index of the pixel containing pRaster (pixels) on a width x height film, row-major from the top-left,
+// or -1 when it lies off the film or is not a number.
+inline long filmPixelIndex(Vec2 pRaster, int width, int height) {
+  const float fx = std::floor(pRaster.x), fy = std::floor(pRaster.y);
+  // Written so that NaN coordinates fail the test too.
+  if (!(fx >= 0.f && fy >= 0.f && fx < float(width) && fy < float(height))) return -1;
+  const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+  if (x >= width || y >= height) return -1;  // guard against float rounding at the far edge
+  return long(y) * width + x;
+}
 
 class Film {
  public:

@@ -45,13 +45,19 @@ void PartialResult::add(const PartialResult& o) {
   if (!common.empty())
     throw std::invalid_argument("PartialResult::add: work unit " + std::to_string(common.front()) +
                                 " is already included");
+  foldSplats();  // ours (a unit's result being added to): the same sums, now in `film`
   const bool emptyFilm = film.width() == 0 && film.height() == 0;
-  if (!emptyFilm && o.film.pixelCount() > 0 &&
-      (film.width() != o.film.width() || film.height() != o.film.height()))
+  auto sameSize = [&](int w, int h) { return emptyFilm || (film.width() == w && film.height() == h); };
+  if ((o.film.pixelCount() > 0 && !sameSize(o.film.width(), o.film.height())) ||
+      (!o.splats.empty() && !sameSize(o.splats.width, o.splats.height)) ||
+      (o.film.pixelCount() > 0 && !o.splats.empty() &&
+       (o.film.width() != o.splats.width || o.film.height() != o.splats.height)))
     throw std::invalid_argument("PartialResult::add: film size mismatch");
 
-  if (emptyFilm) film = o.film;
+  if (emptyFilm && o.film.pixelCount() > 0) film = o.film;
+  else if (emptyFilm && !o.splats.empty()) film = Film(o.splats.width, o.splats.height);
   else if (o.film.pixelCount() > 0) film.merge(o.film);
+  o.splats.addTo(film);
   samples += o.samples;
   stats.add(o.stats);
   if (after) {
@@ -63,6 +69,13 @@ void PartialResult::add(const PartialResult& o) {
     units = std::move(merged);
   }
   seconds += o.seconds;
+}
+
+void PartialResult::foldSplats() {
+  if (splats.empty()) return;
+  if (film.pixelCount() == 0) film = Film(splats.width, splats.height);
+  splats.addTo(film);
+  splats = SparseSplats{};
 }
 
 }  // namespace mlt

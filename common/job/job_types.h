@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/film/film.h"
+#include "common/film/sparse_splats.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
@@ -65,12 +66,18 @@ struct ChainStats {              // sums, so they merge by addition
 
 struct PartialResult {
   Film film;                     // raw sums
+  // A unit's splats not yet in `film` (a Markov chain's: a few thousand of the film's pixels, so that a
+  // unit allocates and scans no dense film; common/film/sparse_splats.h). add() folds them in; a merged
+  // result (a task's, a job's) holds everything in `film`.
+  SparseSplats splats;
   uint64_t samples = 0;          // pixel samples (sample methods) or mutations (chains) it holds
   ChainStats stats;
   std::vector<uint32_t> units;   // work unit indices included (sorted)
   double seconds = 0;            // wall time spent (informational; never affects the image)
   // Element-wise sum. Callers add in unit-index order for bit-identical results.
   void add(const PartialResult& o);
+  // `film` with the splats folded in (a unit's film as a dense film; a no-op on merged results).
+  void foldSplats();
 };
 
 }  // namespace mlt

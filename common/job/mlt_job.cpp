@@ -369,7 +369,6 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const double bChain = spec.chainsPerLength() ? norm.bk[slot] : norm.b;  // Kelemen MIS weights only
 
   PartialResult result;
-  result.film = Film(s.width, s.height);
   result.units = {unit.index};
   KelemenSource source(kelemenParams(s), s.seed, unit.index, unit.startCandidate);
   const std::unique_ptr<PssTarget> target = spec.makeTarget(scene, s);
@@ -387,7 +386,8 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
 
   const std::unique_ptr<ChainState> state = spec.makeChainState(source, s, *target, k);
   PssChainTarget chainTarget(*target, source, k);
-  FilmSink sink(result.film, chainLayer(size_t(slot)));  // scaled by b_k P / M_k only when developed (D2)
+  SparseSplatter splatter(s.width, s.height, uint32_t(chainLayer(size_t(slot))));
+  SparseSink sink(splatter);  // scaled by b_k P / M_k only when developed (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
@@ -395,7 +395,8 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 
-  quantizeFilm(result.film, s.seed, unit.index);
+  result.splats = splatter.take();
+  quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
   st.proposedPerLength.assign(slot + 1, 0);

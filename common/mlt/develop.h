@@ -63,6 +63,7 @@
 #include <vector>
 
 #include "common/film/film.h"
+#include "common/film/sparse_splats.h"
 #include "common/mlt/target_sums.h"
 
 namespace mlt {
@@ -82,5 +83,8 @@ void quantizeSums(TargetSums& sums, uint64_t jobSeed, uint64_t unitIndex, uint64
 // or more are multiples already and are kept as they are; where merged sums exceed 2^(53 - kQuantumExp)
 // the last bits may depend on the grouping (the image is still right, and deterministic per grouping).
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex);
+// The same rounding, with the same keys, for a unit's sparse splats: quantizing them and adding them to
+// a zero film gives the film quantizeFilm gives the dense unit film.
+void quantizeSplats(SparseSplats& splats, uint64_t jobSeed, uint64_t unitIndex);
 
 }  // namespace mlt

@@ -2,6 +2,7 @@
 // a PathEvaluator on it, the sink splats into a Film.
 #pragma once
 #include "common/film/film.h"
+#include "common/film/sparse_splats.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/kelemen_source.h"
@@ -72,6 +73,20 @@ class FilmSink final : public ChainSink {
  private:
   Film& film_;
   size_t layer_;
+};
+
+// Splats into one unit's sparse splat buffer (common/film/sparse_splats.h), unscaled like FilmSink: what
+// a chain work unit uses, so that it never allocates or scans a dense film.
+class SparseSink final : public ChainSink {
+ public:
+  explicit SparseSink(SparseSplatter& splatter) : splatter_(splatter) {}
+  void splat(const PathContribution& path, double weight) override {
+    const float w = static_cast<float>(weight);
+    for (const Splat& s : path.splats) splatter_.addSplat(s.pRaster, s.L * w);
+  }
+
+ private:
+  SparseSplatter& splatter_;
 };
 
 }  // namespace mlt

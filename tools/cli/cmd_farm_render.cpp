@@ -12,7 +12,7 @@
 
 namespace mlt::cli {
 
-void renderWithLocalFarm(const LocalRenderOptions& o, int workers) {
+void renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std::string& farmDir) {
   if (o.settings.timeBudgetSeconds > 0 || o.techniqueImages)
     throw std::invalid_argument("--time and --technique-images need --in-process");
   if (!o.outExr.empty()) {  // fail before rendering, not after
@@ -20,8 +20,12 @@ void renderWithLocalFarm(const LocalRenderOptions& o, int workers) {
     if (!std::filesystem::is_directory(dir))
       throw std::runtime_error(o.outExr + ": output directory " + dir.string() + " does not exist");
   }
+  if (!farmDir.empty() && std::filesystem::exists(farmDir) && !std::filesystem::is_empty(farmDir))
+    throw std::runtime_error("--farm-dir " + farmDir + ": not empty (a farm there would resume the jobs it holds); "
+                             "give a new or empty directory");
   farm::EmbeddedFarmOptions e;
   e.scenePath = o.scenePath;
+  e.stateDir = farmDir;
   e.settings.settings = o.settings;
   e.settings.hasSize = o.settings.width > 0 && o.settings.height > 0;
   if (o.maxDepth) e.settings.settings.integrator.maxDepth = *o.maxDepth;

@@ -18,7 +18,7 @@ namespace {
 
 // render's own options; the render settings are the shared group (settings_options.h).
 struct RenderCliOptions {
-  std::string scene, out, png;
+  std::string scene, out, png, farmDir;
   int threads = 0, workers = 0;
   double time = 0;
   float exposure = 0;
@@ -27,9 +27,9 @@ struct RenderCliOptions {
 
 // The local farm, then (Markov chains) the summary that `--in-process` prints, read back from the image's
 // metadata; the seconds are the farm's wall time, startup and bootstrap included.
-void renderWithLocalFarmAndReport(const LocalRenderOptions& lo, int workers) {
+void renderWithLocalFarmAndReport(const LocalRenderOptions& lo, int workers, const std::string& farmDir) {
   const auto start = std::chrono::steady_clock::now();
-  renderWithLocalFarm(lo, workers);
+  renderWithLocalFarm(lo, workers, farmDir);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!isMarkovChainMethod(lo.settings.method) || lo.outExr.empty()) return;
   const ChainReport report = chainReportFromMetadata(readExr(lo.outExr).metadata);
@@ -61,6 +61,9 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_option("-w,--workers", o->workers,
                  "Local farm: worker processes, sharing --threads (default: one worker process with every thread)")
       ->check(CLI::NonNegativeNumber);
+  sub.add_option("--farm-dir", o->farmDir,
+                 "Local farm: keep its state (coordinator and worker logs, job database, films) in this "
+                 "directory instead of a temporary one removed when the job succeeds");
   sub.add_flag("--technique-images", o->techniqueImages,
                "bdpt: also write OUT_s<s>_t<t>.exr/.png, one image per technique (s light vertices, t camera "
                "vertices), MIS-weighted so that they sum to the full image");
@@ -83,7 +86,9 @@ CommandRun setupRender(CLI::App& sub) {
     lo.showProgress = !o->quiet;
     lo.techniqueImages = o->techniqueImages;
     if (!o->inProcess && o->time == 0 && !lo.techniqueImages)
-      renderWithLocalFarmAndReport(lo, o->workers);
+      renderWithLocalFarmAndReport(lo, o->workers, o->farmDir);
+    else if (!o->farmDir.empty())
+      throw std::invalid_argument("--farm-dir is for the local farm; this render runs in-process");
     else
       renderLocal(lo);
     return 0;

@@ -6,7 +6,8 @@
 
 namespace mlt::cli {
 
-// workers: worker processes (0 = every core), each running one work unit at a time.
-void renderWithLocalFarm(const LocalRenderOptions& options, int workers);
+// workers: worker processes (0 = one with every thread). farmDir: where the farm keeps its state and
+// logs (empty: a temporary directory, removed when the job succeeds).
+void renderWithLocalFarm(const LocalRenderOptions& options, int workers, const std::string& farmDir = "");
 
 }  // namespace mlt::cli

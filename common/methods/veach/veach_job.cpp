@@ -108,9 +108,9 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   const double cx = targetFunction(current);
 
   PartialResult result;
-  result.film = Film(s.width, s.height);
   result.units = {unit.index};
-  FilmSink sink(result.film, chainLayer(0));  // b P / M applied at develop (D1)
+  SparseSplatter splatter(s.width, s.height, uint32_t(chainLayer(0)));
+  SparseSink sink(splatter);  // b P / M applied at develop (D1)
   ChainConfig config;                         // expected-value splatting
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
@@ -127,7 +127,8 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     }
   }
 
-  quantizeFilm(result.film, s.seed, unit.index);
+  result.splats = splatter.take();
+  quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
   st.proposedPerKind.assign(counts.proposed, counts.proposed + kNumKinds);

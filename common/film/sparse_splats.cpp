@@ -1,0 +1,86 @@
+// Sparse splats of one work unit (see sparse_splats.h).
+#include "common/film/sparse_splats.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace mlt {
+
+void SparseSplats::addTo(Film& film) const {
+  if (empty()) return;
+  if (film.width() != width || film.height() != height)
+    throw std::invalid_argument("SparseSplats::addTo: film size mismatch " + std::to_string(film.width()) + "x" +
+                                std::to_string(film.height()) + " vs " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  for (const Layer& l : layers) {
+    std::vector<RGBd>& buffer = film.splatLayer(l.layer);
+    for (size_t j = 0; j < l.index.size(); ++j) buffer[l.index[j]] += l.value[j];
+  }
+  film.setNonFiniteSamples(film.nonFiniteSamples() + nonFinite);
+}
+
+// A dense layer kept zero between units, a byte per pixel marking the touched ones, and their list.
+struct SparseSplatter::Scratch {
+  std::vector<RGBd> dense;
+  std::vector<uint8_t> touched;
+  std::vector<uint32_t> list;
+  bool inUse = false;
+  void fit(size_t pixels) {
+    if (dense.size() == pixels) return;
+    dense.assign(pixels, RGBd{});
+    touched.assign(pixels, 0);
+    list.clear();
+  }
+};
+
+SparseSplatter::SparseSplatter(int width, int height, uint32_t layer) : width_(width), height_(height), layer_(layer) {
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("SparseSplatter: film size must be positive, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  // One scratch per thread, reused unit after unit; a second splatter alive on the same thread (never in
+  // the executor, possible in a test) gets its own.
+  static thread_local Scratch threadScratch;
+  owned_ = threadScratch.inUse;
+  scratch_ = owned_ ? new Scratch : &threadScratch;
+  scratch_->inUse = true;
+  scratch_->fit(size_t(width) * size_t(height));
+  dense_ = scratch_->dense.data();
+  touched_ = scratch_->touched.data();
+  list_ = &scratch_->list;
+  list_->clear();
+}
+
+SparseSplatter::~SparseSplatter() {
+  // Leave the scratch zero for the next unit even if this one was abandoned (an exception in the chain).
+  for (uint32_t i : *list_) {
+    dense_[i] = RGBd{};
+    touched_[i] = 0;
+  }
+  list_->clear();
+  scratch_->inUse = false;
+  if (owned_) delete scratch_;
+}
+
+SparseSplats SparseSplatter::take() {
+  SparseSplats out;
+  out.width = width_;
+  out.height = height_;
+  out.nonFinite = nonFinite_;
+  SparseSplats::Layer& l = out.layers.emplace_back();
+  l.layer = layer_;
+  std::sort(list_->begin(), list_->end());
+  l.index = *list_;
+  l.value.resize(l.index.size());
+  for (size_t j = 0; j < l.index.size(); ++j) {
+    const uint32_t i = l.index[j];
+    l.value[j] = dense_[i];
+    dense_[i] = RGBd{};
+    touched_[i] = 0;
+  }
+  list_->clear();
+  nonFinite_ = 0;
+  return out;
+}
+
+}  // namespace mlt
