@@ -57,6 +57,10 @@ done
 ratio() { read -r a am <<< "$(stat "$TMP/in-process.times" "$1")"; read -r b bm <<< "$(stat "$TMP/farm.times" "$1")"
           awk -v a="$a" -v b="$b" -v am="$am" -v bm="$bm" 'BEGIN {printf "%.3f (best) %.3f (median)", b / a, bm / am}'; }
 echo "farm / in-process wall: $(ratio 1)"
+# Each farm run against the in-process run just before it: a machine whose speed drifts over minutes
+# (a shared host) moves both sides of a pair alike, so the median of these ratios is the steadier figure.
+pairs=$(paste -d' ' "$TMP/in-process.times" "$TMP/farm.times" | awk '{print $4 / $1}' | sort -g)
+echo "farm / in-process wall, run by run: $(echo $pairs | tr ' ' '\n' | awk '{printf "%.3f ", $1}')(median $(echo "$pairs" | awk '{v[NR]=$1} END {printf "%.3f", (NR%2 ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2)}'))"
 cpu() { awk '{s = $2 + $3; print s}' "$1" | sort -g | head -1; }
 echo "farm / in-process CPU (user+sys, best): $(awk -v a="$(cpu "$TMP/in-process.times")" -v b="$(cpu "$TMP/farm.times")" 'BEGIN {printf "%.3f (%.2f s vs %.2f s)", b / a, b, a}')"
 echo "machine after: $(uptime | sed 's/.*load average/load average/')"
