@@ -189,6 +189,7 @@ TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   const auto box = RenderScene::build(test::smallCornellBox(16, 16));
   RenderSettings s = smallSettings();
   s.separateDirect = true;
+  s.spp = 0;  // the direct pass would have no samples
   EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
   const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));
   EXPECT_THROW(veach::planVeachJob(*pointLights, smallSettings()), std::invalid_argument);

@@ -1,6 +1,7 @@
 // Veach's path space: f(x) and local densities in the canonical measure (see path.h).
 #include "common/methods/veach/path.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -60,8 +61,8 @@ double lightChainToCanonical(const Path& x, int r0, int r1) {
   return factor;
 }
 
-PathSpace::PathSpace(const RenderScene& scene, int maxDepth)
-    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth) {
+PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges)
+    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth), minEdges_(std::max(minEdges, 1)) {
   for (const auto& l : scene.lights())
     if (l->infinite() || l->deltaPosition() || l->deltaDirection())
       throw std::invalid_argument("veach-mlt: only area lights are supported (the scene has a point, spot, "
@@ -70,7 +71,7 @@ PathSpace::PathSpace(const RenderScene& scene, int maxDepth)
 
 Color PathSpace::f(const Path& x, Vec2* pRaster) const {
   const int k = x.k();
-  if (k < 1 || k > maxEdges_) return {};
+  if (k < minEdges_ || k > maxEdges_) return {};
   const auto& v = x.v;
   if (v[0].kind != VertexKind::Light || !v[0].light || v[k].kind != VertexKind::Camera) return {};
   for (int i = 1; i < k; ++i)

@@ -75,14 +75,17 @@ std::optional<SpecularLobe> specularLobe(const Bsdf& bsdf, const Vec3& woL, cons
 // Path-space functions of one scene and depth limit.
 class PathSpace {
  public:
-  // maxDepth: at most this many edges (-1: kUnlimitedEdges). Throws for unsupported lights.
-  PathSpace(const RenderScene& scene, int maxDepth);
+  // maxDepth: at most this many edges (-1: kUnlimitedEdges); minEdges: at least this many (separateDirect:
+  // kDirectMaxSegments + 1, the shorter paths are the direct pass's; f is zero on them). Throws for
+  // unsupported lights.
+  PathSpace(const RenderScene& scene, int maxDepth, int minEdges = 1);
   const RenderScene& scene() const { return scene_; }
   int maxEdges() const { return maxEdges_; }
+  int minEdges() const { return minEdges_; }
   static constexpr int kUnlimitedEdges = 32;
 
   // f(x) in the canonical measure, with visibility; *pRaster: where the path lands. Zero (and no raster)
-  // when invalid: length, a vertex of the wrong kind, a specular vertex without a matching lobe, a
+  // when invalid: length outside [minEdges, maxEdges], a vertex of the wrong kind, a specular vertex without a matching lobe, a
   // blocked edge, the lens edge outside the film.
   Color f(const Path& x, Vec2* pRaster) const;
 
@@ -114,6 +117,7 @@ class PathSpace {
  private:
   const RenderScene& scene_;
   int maxEdges_;
+  int minEdges_;
 };
 
 // Geometric term with geometric normals, no visibility.
