@@ -22,6 +22,8 @@
 // the longer paths only (PathSpace minEdges = chainMinLength(true): f = 0 on the shorter, so moves to them
 // are rejected), and their b, bootstrap candidates and start strategies leave the direct paths out as
 // mmlt's do (EvaluatorPssTarget with separateDirect; startPathFromSample skips those strategies).
+// Scenes: area, point and spot lights (path.h: a point or spot light is x_0 of counting measure);
+// directional and environment lights are refused at plan time, naming the light.
 // Not supported: Kelemen MIS splatting (ignored: expected values).
 #pragma once
 #include <string>

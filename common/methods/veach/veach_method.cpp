@@ -85,7 +85,8 @@ double VeachMltMethod::candidateCost(const RenderSettings& settings) const {
 std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
   // pssmlt-bdpt's target: c(u) of a bdpt sample, whose mean is b = integral of lum f over path space
   // (separateDirect: over the paths of more than kDirectMaxSegments segments, the chains' PathSpace).
-  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator), settings.separateDirect);
+  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator),
+                                              settings.separateDirect);
 }
 
 std::unique_ptr<ChainState> VeachMltMethod::makeState(KelemenSource&, const RenderSettings&) const {
