@@ -1,7 +1,8 @@
 // veach-mlt chains converge to the bdpt image: each mutation together with the bidirectional mutation
 // (needed for ergodicity), and all of them, on small scenes that exercise the moves -- the diffuse
 // Cornell box, the box with a glass and a mirror sphere (caustics on the floor, the box seen through
-// glass), and that box through a thin lens. Compared: the image mean and 4 x 4 tile means (luminance),
+// glass), that box through a thin lens, and boxes lit by a point or a spot light (delta-position light
+// vertices; with the glass sphere, caustics from them). Compared: the image mean and 4 x 4 tile means (luminance),
 // veach-mlt over kRuns independent job seeds (through plan -> run every chain -> merge -> develop,
 // common/methods/veach/veach_job.h; its spread gives the standard error, b's included) against bdpt over
 // independent pixel samples. Pass: every |difference| below kZ combined standard errors (17 comparisons,
@@ -14,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -86,6 +88,9 @@ double compare(const char* name, const RenderScene& scene, int maxDepth, const M
   const test::ImageStats st = test::veachStats(scene, s, mut, kRuns, kTiles, 4000, &acc);
   int where = 0;
   const double z = test::maxZ(st, ref, &where);
+  if (getenv("VEACH_DEBUG"))
+    for (size_t e = 0; e < st.mean.size(); ++e)
+      std::printf("  entry %zu: %.5f +- %.5f vs bdpt %.5f +- %.5f\n", e, st.mean[e], st.stdErr[e], ref.mean[e], ref.stdErr[e]);
   std::printf("%s: mean %.5f +- %.5f (bdpt %.5f +- %.5f), max z %.2f at %d; acceptance: %s\n", name, st.mean[0],
               st.stdErr[0], ref.mean[0], ref.stdErr[0], z, where, acc.c_str());
   return z;
@@ -184,6 +189,39 @@ TEST(VeachChain, ThinLens) {
   const test::ImageStats ref = bdptStats(*scene, 4, 512);
   EXPECT_LT(compare("thin lens, bidir + lens", *scene, 4, only({veach::kBidir, veach::kLens}), 96, ref), kZ);
   EXPECT_LT(compare("thin lens, all", *scene, 4, MutationSettings{}, 96, ref), kZ);
+}
+
+// Delta-position lights (path.h): the box lit by the point light alone, by the spot light alone, and the
+// glass sphere's box lit by both (caustics next to the light: the light-free run of path.h).
+SceneDesc oneLight(SceneDesc d, LightDesc::Type keep) {
+  std::erase_if(d.lights, [keep](const LightDesc& l) { return l.type != keep; });
+  return d;
+}
+
+TEST(VeachChain, PointLight) {
+  const auto scene = RenderScene::build(oneLight(test::cornellBoxPointSpot(kSize, kSize), LightDesc::Type::Point));
+  ASSERT_EQ(scene->lights().size(), 1u);
+  const test::ImageStats ref = bdptStats(*scene, 5, 256);
+  EXPECT_LT(compare("point light, bidir", *scene, 5, only({veach::kBidir}), 64, ref), kZ);
+  EXPECT_LT(compare("point light, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 64, ref), kZ);
+  EXPECT_LT(compare("point light, all", *scene, 5, MutationSettings{}, 64, ref), kZ);
+}
+
+TEST(VeachChain, SpotLight) {
+  const auto scene = RenderScene::build(oneLight(test::cornellBoxPointSpot(kSize, kSize), LightDesc::Type::Spot));
+  ASSERT_EQ(scene->lights().size(), 1u);
+  const test::ImageStats ref = bdptStats(*scene, 5, 256);
+  EXPECT_LT(compare("spot light, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 64, ref), kZ);
+  EXPECT_LT(compare("spot light, all", *scene, 5, MutationSettings{}, 64, ref), kZ);
+}
+
+TEST(VeachChain, GlassSphereLitByPointAndSpot) {
+  SceneDesc d = test::cornellBoxSpecularPointSpot(kSize, kSize);
+  std::erase_if(d.meshes, [](const MeshDesc& m) { return m.name == "mirror sphere"; });
+  const auto scene = RenderScene::build(d);
+  const test::ImageStats ref = bdptStats(*scene, 4, 512);
+  EXPECT_LT(compare("glass, point + spot, bidir + caustic", *scene, 4, only({veach::kBidir, veach::kCaustic}), 96, ref), kZ);
+  EXPECT_LT(compare("glass, point + spot, all", *scene, 4, MutationSettings{}, 96, ref), kZ);
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "common/job/mlt_job.h"
 #include "common/methods/image_metadata.h"
@@ -195,9 +197,28 @@ TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   const auto box = RenderScene::build(test::smallCornellBox(16, 16));
   RenderSettings s = smallSettings();
   s.separateDirect = true;
+  s.spp = 0;  // the direct pass would have no samples
   EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
+  // Point and spot lights are supported (path.h); directional and environment lights are refused, the
+  // message naming the light and its type.
   const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));
-  EXPECT_THROW(veach::planVeachJob(*pointLights, smallSettings()), std::invalid_argument);
+  EXPECT_NO_THROW(veach::planVeachJob(*pointLights, smallSettings()));
+  for (const auto& [type, name] : {std::pair{LightDesc::Type::Directional, "directional"},
+                                   std::pair{LightDesc::Type::Constant, "environment"}}) {
+    SceneDesc d = test::cornellBoxPointSpot(16, 16);
+    LightDesc l;
+    l.type = type;
+    l.direction = Vec3(0, -1, 0);
+    d.lights.push_back(l);
+    const auto scene = RenderScene::build(d);
+    try {
+      veach::planVeachJob(*scene, smallSettings());
+      ADD_FAILURE() << name << " light accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("light 2"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

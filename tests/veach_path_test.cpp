@@ -29,7 +29,7 @@ using veach::Path;
 using veach::PathSpace;
 
 struct Agreement {
-  int compared = 0, agreed = 0, withSpecular = 0, lightChains = 0;
+  int compared = 0, agreed = 0, withSpecular = 0, lightChains = 0, deltaLight = 0, deltaLightChains = 0;
   double worst = 0;
 };
 
@@ -45,11 +45,14 @@ Agreement compareStrategies(const RenderScene& scene, int maxDepth, uint64_t see
     const int nl = generateLightSubpath(scene, source, maxDepth, -1, ws.light.data());
     for (int t = 2; t <= nc; ++t) {
       for (int s = 0; s <= nl; ++s) {
-        if (s == 1 || s + t - 1 > maxDepth || s + t < 2) continue;  // s = 1 resamples the light by NEE
+        if (s + t - 1 > maxDepth || s + t < 2) continue;
         Vertex sampled;
         Vec2 pr = raster;
         const Color C = connectBdpt(scene, source, ws.light.data(), s, ws.camera.data(), t, &sampled, &pr);
         if (C.isBlack()) continue;
+        // s = 1 resamples the light by NEE, whose area density differs from pdfLe's, except on a point or
+        // spot light (pmf alone, as lightStep(x, 0)).
+        if (s == 1 && !sampled.light->deltaPosition()) continue;
         source.startStream(Stream::Camera);
         source.seek(2);
         const Path x = veach::bdptStrategyPath(ws.light.data(), s, ws.camera.data(), t, sampled, source.next2D());
@@ -66,12 +69,14 @@ Agreement compareStrategies(const RenderScene& scene, int maxDepth, uint64_t see
           while (x.v[r1 + 1].specular) ++r1;
           p *= veach::lightChainToCanonical(x, i, r1);
           a.lightChains += 1;
+          a.deltaLightChains += i == 1 && veach::isDeltaPositionLight(x.v[0]);
           i = r1 + 1;
         }
         for (int i = s; i < x.k(); ++i) p *= space.eyeStep(x, i);
         const double expect = luminance(C), got = p > 0 ? luminance(f) / p : 0.0;
         const double rel = std::fabs(got - expect) / expect;
         ++a.compared;
+        a.deltaLight += veach::isDeltaPositionLight(x.v[0]);
         bool specular = false;
         for (const auto& v : x.v) specular |= v.specular;
         a.withSpecular += specular;
@@ -111,6 +116,49 @@ TEST(VeachPath, ContributionOverDensityIsBdptsUnweightedContributionSpecularChai
   ASSERT_GT(a.withSpecular, 300);
   ASSERT_GT(a.lightChains, 100);
   EXPECT_GE(a.agreed, int(0.995 * a.compared));
+}
+
+// Point and spot lights (path.h, delta-position lights): x_0 has density pmf, emits its intensity, is never
+// reached from the eye; a specular run next to it stays light-free. Every strategy bdpt has for them (s >= 1;
+// s = 0 cannot hit a point) gives C(s, t) = f / p, including light-traced caustic chains from the point.
+TEST(VeachPath, ContributionOverDensityIsBdptsUnweightedContributionPointAndSpotLights) {
+  const auto diffuse = RenderScene::build(test::cornellBoxPointSpot(16, 16));
+  const Agreement a = compareStrategies(*diffuse, 5, 13, 3000);
+  std::printf("point + spot, diffuse box: %d strategies compared (%d from a delta light), %d agree (worst %.3g)\n",
+              a.compared, a.deltaLight, a.agreed, a.worst);
+  ASSERT_GT(a.deltaLight, 3000);
+  EXPECT_EQ(a.deltaLight, a.compared);
+  EXPECT_GE(a.agreed, int(0.999 * a.compared));
+
+  const auto specular = RenderScene::build(test::cornellBoxSpecularPointSpot(16, 16));
+  const Agreement b = compareStrategies(*specular, 6, 14, 4000);
+  std::printf("point + spot, glass + mirror box: %d strategies compared (%d with specular vertices, %d light-traced "
+              "specular runs, %d of them next to the light), %d agree (worst %.3g)\n", b.compared, b.withSpecular,
+              b.lightChains, b.deltaLightChains, b.agreed, b.worst);
+  ASSERT_GT(b.withSpecular, 300);
+  ASSERT_GT(b.deltaLightChains, 100);
+  EXPECT_GE(b.agreed, int(0.995 * b.compared));
+}
+
+// The point light seen directly by the pinhole (L E, in the camera's view) has measure zero: f = 0, as
+// bdpt has no strategy for it. (With f > 0 the bidirectional mutation proposed it and the chains piled up
+// on the light's pixel: veach_chain_test's PointLight failed with z = 53.)
+TEST(VeachPath, PointLightSeenDirectlyHasNoContribution) {
+  const auto scene = RenderScene::build(test::cornellBoxPointSpot(16, 16));
+  const PathSpace space(*scene, 5);
+  Path x;
+  veach::PathVertex light;
+  light.kind = veach::VertexKind::Light;
+  light.lightIndex = 0;
+  light.light = &scene->light(0);
+  ASSERT_TRUE(light.light->deltaPosition());
+  light.p = Vec3(-0.3f, 0.8f, 0.0f);  // cornellBoxPointSpot's point light
+  x.uLens = Vec2(0.5f, 0.5f);
+  Vec3 dir;
+  x.v = {light, space.cameraVertex(Vec2(8, 8), x.uLens, &dir)};
+  Vec2 raster;
+  EXPECT_TRUE(space.raster(x, &raster)) << "the light is in the camera's view";
+  EXPECT_TRUE(space.f(x, nullptr).isBlack());
 }
 
 TEST(VeachPath, StartPathReplaysTheBootstrapValue) {

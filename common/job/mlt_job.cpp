@@ -35,9 +35,9 @@ uint64_t defaultChains(uint64_t totalMutations) {
   return std::clamp<uint64_t>(totalMutations / 16384, 64, 4096);
 }
 
-bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > u.sampleBegin; }
-
 }  // namespace
+
+bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > u.sampleBegin; }
 
 int chainMinLength(bool separateDirect) { return separateDirect ? kDirectMaxSegments + 1 : 1; }
 
@@ -185,10 +185,17 @@ void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings&
   if (s.width <= 0 || s.height <= 0) throw std::invalid_argument("settings: film size not resolved");
   if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
-  if (s.separateDirect && !spec.allowsSeparateDirect())
+  validateSeparateDirect(spec, s);
+  chainPathLengths(spec, s);  // chains per length: a valid max depth
+}
+
+void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
+  if (!s.separateDirect) return;
+  if (!spec.allowsSeparateDirect())
     throw std::invalid_argument("settings: " + spec.name() +
                                 " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
-  chainPathLengths(spec, s);  // chains per length: a valid max depth
+  if (s.spp < 1)
+    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1, got " + std::to_string(s.spp));
 }
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
@@ -344,19 +351,22 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   return plan;
 }
 
+PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
+  if (!isDirectUnit(unit)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is not a sample batch of the direct pass");
+  if (!plan.settings.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
+  const JobPlan d = directPlan(plan);
+  const auto evaluator = makeEvaluator(scene, "bdpt", d.settings.integrator);
+  PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
+  r.samples = 0;  // samples count mutations in a Markov chain job
+  return r;
+}
+
 PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   const Normalization& norm = plan.norm;
 
-  if (isDirectUnit(unit)) {
-    if (!s.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
-    const JobPlan d = directPlan(plan);
-    const auto evaluator = makeEvaluator(scene, "bdpt", d.settings.integrator);
-    PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
-    r.samples = 0;  // samples count mutations in a Markov chain job
-    return r;
-  }
+  if (isDirectUnit(unit)) return runDirectUnit(scene, plan, unit);
 
   if (unit.mutations == 0) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " has no mutations");
   const int k = unit.pathLength;

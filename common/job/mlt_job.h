@@ -134,6 +134,9 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
 // >= 0, bootstrap samples 0 or >= 2); throws std::invalid_argument naming the setting.
 void validateChainWorkSettings(const RenderSettings& settings);
 void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& settings);
+// separateDirect: the method can leave out the direct light and the direct pass has spp >= 1; throws
+// std::invalid_argument naming the setting.
+void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& settings);
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
                                              const RenderSettings& settings);
 // Chain allocation from an existing bootstrap: the same plan, bit for bit, as planMarkovChainJob(scene,
@@ -144,6 +147,10 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 // Bootstrap (b, bk, candidates), chain allocation: a plan whose units are chains. settings.width/height
 // are already resolved against the scene camera by planJob.
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, const RenderSettings& settings);
+// A unit of the direct pass (separateDirect: sample batches appended after the chains) and how it runs:
+// bdpt with at most kDirectMaxSegments segments (pixel samples + t = 1 splats in layer 0).
+bool isDirectUnit(const WorkUnit& unit);
+PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Runs one chain (unit.startCandidate, unit.mutations, ...) and returns its raw splat sums + stats.
 PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Normalization of the merged chains (b * P / M per length; see mlt/develop.h).

@@ -17,11 +17,7 @@ std::unique_ptr<ChainState> PrimarySampleChainMethod::makeState(KelemenSource& s
 void PrimarySampleChainMethod::validate(const RenderSettings& s) const {
   RenderMethod::validate(s);
   validateChainWorkSettings(s);
-  if (s.separateDirect && !allowsSeparateDirect())
-    throw std::invalid_argument("settings: " + name() +
-                                " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
-  if (s.separateDirect && s.spp < 1)
-    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1, got " + std::to_string(s.spp));
+  validateSeparateDirect(*this, s);
   KelemenSource kernel(kelemenParams(resolveChainSettings(*this, s)), 0, 0, 0);  // throws on bad kernel parameters
   chainPathLengths(*this, s);                        // chains per length: a valid max depth
 }

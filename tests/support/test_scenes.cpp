@@ -156,8 +156,9 @@ SceneDesc smallCornellBox(int width, int height, Color Le) {
   return s;
 }
 
-SceneDesc cornellBoxSpecular(int width, int height, bool smoothNormals) {
-  SceneDesc s = cornellShell(width, height);
+namespace {
+
+void addSpecularSpheres(SceneDesc& s, bool smoothNormals) {
   BsdfDesc glass;
   glass.type = BsdfDesc::Type::Dielectric;
   glass.id = "glass";
@@ -173,13 +174,9 @@ SceneDesc cornellBoxSpecular(int width, int height, bool smoothNormals) {
   const int mirrorId = int(s.bsdfs.size()) - 1;
   s.meshes.push_back(sphereMesh("glass sphere", glassId, Vec3(0.45f, -0.65f, -0.2f), 0.35f, 16, false, smoothNormals));
   s.meshes.push_back(sphereMesh("mirror sphere", mirrorId, Vec3(-0.45f, -0.65f, 0.4f), 0.35f, 16, false, smoothNormals));
-  addCeilingLight(s, Color(10.0f));
-  return s;
 }
 
-SceneDesc cornellBoxPointSpot(int width, int height) {
-  SceneDesc s = cornellShell(width, height);
-  s.meshes.push_back(boxMesh("block", 0, Vec3(0.35f, -0.6f, 0.3f), Vec3(0.3f, 0.4f, 0.3f), 0.3f));
+void addPointAndSpot(SceneDesc& s) {
   LightDesc point;
   point.type = LightDesc::Type::Point;
   point.intensity = Color(2.0f);
@@ -193,6 +190,28 @@ SceneDesc cornellBoxPointSpot(int width, int height) {
   spot.cutoffAngleDeg = 35;
   spot.beamWidthDeg = 25;
   s.lights.push_back(spot);
+}
+
+}  // namespace
+
+SceneDesc cornellBoxSpecular(int width, int height, bool smoothNormals) {
+  SceneDesc s = cornellShell(width, height);
+  addSpecularSpheres(s, smoothNormals);
+  addCeilingLight(s, Color(10.0f));
+  return s;
+}
+
+SceneDesc cornellBoxPointSpot(int width, int height) {
+  SceneDesc s = cornellShell(width, height);
+  s.meshes.push_back(boxMesh("block", 0, Vec3(0.35f, -0.6f, 0.3f), Vec3(0.3f, 0.4f, 0.3f), 0.3f));
+  addPointAndSpot(s);
+  return s;
+}
+
+SceneDesc cornellBoxSpecularPointSpot(int width, int height) {
+  SceneDesc s = cornellShell(width, height);
+  addSpecularSpheres(s, /*smoothNormals=*/true);
+  addPointAndSpot(s);
   return s;
 }
 

@@ -25,6 +25,9 @@ SceneDesc smallCornellBox(int width, int height, Color Le = Color(10.0f));
 SceneDesc cornellBoxSpecular(int width, int height, bool smoothNormals = true);
 // The box without its area light, lit by a point light and a spot light (delta-position emitters).
 SceneDesc cornellBoxPointSpot(int width, int height);
+// The glass and mirror spheres of cornellBoxSpecular lit by cornellBoxPointSpot's two lights (caustics of
+// delta-position lights).
+SceneDesc cornellBoxSpecularPointSpot(int width, int height);
 // Two area lights of very different size and power: a large dim panel under the ceiling (1.6 x 1.6,
 // Le = 0.5) and a small bright one (0.08 x 0.08, Le = 400) inside a mirror reflector (an open cup of four
 // mirror walls) near the ceiling's left corner, plus the block. Light selection by power picks the small

@@ -62,7 +62,7 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       ->capture_default_str()
       ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
   add_flag("--separate-direct", separateDirect_,
-           "pssmlt-bdpt, mmlt: render paths of up to 2 segments by bdpt (--spp samples) and let the chains do "
+           "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples) and let the chains do "
            "only the longer ones (Veach's refinement)");
   maxDepthOpt_ = add_option("--max-depth", maxDepth_,
                             "Maximum path length in segments (edges): 1 = directly visible emitters "

@@ -13,6 +13,8 @@
 // when there is no light side at all (l = -1, l' = 0), the eye side must end on an emitter.
 // Both sides follow Dirac lobes (the kept end x_l excepted: it stays non-specular); a specular run traced
 // from the light side has its density converted to the canonical measure (path.h lightChainToCanonical).
+// A point or spot light (path.h) is re-sampled only by the light side (density pmf, direction by its
+// sampleLe); the splits in which the eye side would end on it have density 0 (eyeStep).
 //
 // Transition density (the lecture's g(x -> y)):
 //     T(x -> y) = sum over (l, m) whose kept parts x_0..x_l, x_m..x_k are y's ends
@@ -113,7 +115,13 @@ class BidirMutation final : public Mutation {
       } else {
         Vec3 w;
         const PathVertex& from = y.v.back();
-        if (y.v.size() == 1) {
+        if (y.v.size() == 1 && from.light->deltaPosition()) {
+          // Emission from a point or spot light: its own sampleLe direction (pdfLe's pdfDir; the position
+          // is the light's, whatever uPos).
+          const std::optional<LightLeSample> le = from.light->sampleLe(Vec2(0.5f, 0.5f), rng.uniform2());
+          if (!le || le->L.isBlack() || !(le->pdfDir > 0)) return false;
+          w = le->ray.d;
+        } else if (y.v.size() == 1) {
           // Emission: cosine-weighted about the light's normal, as AreaLight::sampleLe (pdfLe's pdfDir).
           const Vec3 local = sampleCosineHemisphere(rng.uniform2());
           if (!(local.z > 0)) return false;
@@ -181,13 +189,16 @@ class BidirMutation final : public Mutation {
     // add densities of a higher dimension (a kept vertex counted as regenerated): veach_density_test
     // measured T 15-20% too high that way. The one exception is a pinhole's lens point, which a new lens
     // vertex reproduces exactly: with only the lens point shared, m = kx + 1 (lens regenerated) also counts.
+    // Likewise at the other end a point or spot light, which a new light vertex reproduces with probability
+    // pmf: with only x_0 shared on such a light, l = -1 (light regenerated) also counts.
     if (prefix + suffix > std::min(kx, ky) + 1) return 0;  // y = x (the identity proposal; see veach_chain.cpp)
-    const int l = prefix - 1;
-    if (l > kx - 1) return 0;
+    int lCandidates[2] = {prefix - 1, -2};
+    if (prefix == 1 && isDeltaPositionLight(x.v[0])) lCandidates[1] = -1;
     int mCandidates[2] = {kx - suffix + 1, -1};
     if (suffix == 1 && space_.scene().camera().deltaPosition()) mCandidates[1] = kx + 1;
     double total = 0;
-    {
+    for (const int l : lCandidates) {
+      if (l < -1 || l > kx - 1) continue;
       for (const int m : mCandidates) {
         if (m < std::max(l + 1, 1) || m > kx + 1) continue;
         const int nB = kx - m + 1;

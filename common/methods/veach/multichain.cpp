@@ -33,7 +33,10 @@ std::vector<int> chainEnds(const Path& x) {
     while (i >= 1 && x.v[i].specular) --i;
     if (i < 0) return {};
     d.push_back(i);
-    if (i == 0) break;                  // the last chain ends on the light
+    if (i == 0) {                       // the last chain ends on the light, which it must hit again:
+      if (isDeltaPositionLight(x.v[0])) return {};  // never a point or spot light
+      break;
+    }
     if (!x.v[i - 1].specular) break;    // a connectible pair: done
     --i;
   }

@@ -1,9 +1,12 @@
 // Veach's path space: f(x) and local densities in the canonical measure (see path.h).
 #include "common/methods/veach/path.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "common/render/render_scene.h"
 
@@ -44,7 +47,14 @@ float geometry(const PathVertex& a, const PathVertex& b) {
   return PathSpace::cosAt(a, w) * PathSpace::cosAt(b, w) / d2;
 }
 
-double lightChainToCanonical(const Path& x, int r0, int r1) {
+bool isDeltaPositionLight(const PathVertex& v) {
+  return v.kind == VertexKind::Light && v.light && v.light->deltaPosition();
+}
+
+namespace {
+
+// The etendue conversion factor of lightChainToCanonical (path.h), whatever the chain's light end.
+double etendueFactor(const Path& x, int r0, int r1) {
   const auto& v = x.v;
   const double gv = geometry(v[r0 - 1], v[r0]);
   if (!(gv > 0)) return 0;
@@ -60,24 +70,59 @@ double lightChainToCanonical(const Path& x, int r0, int r1) {
   return factor;
 }
 
-PathSpace::PathSpace(const RenderScene& scene, int maxDepth)
-    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth) {
-  for (const auto& l : scene.lights())
-    if (l->infinite() || l->deltaPosition() || l->deltaDirection())
-      throw std::invalid_argument("veach-mlt: only area lights are supported (the scene has a point, spot, "
-                                  "directional or environment light)");
+// The run of specular vertices x_1 .. x_r1 next to a delta-position light (path.h): r1, or 0 if there is none.
+int deltaLightRunEnd(const Path& x) {
+  if (x.k() < 2 || !isDeltaPositionLight(x.v[0]) || !x.v[1].specular) return 0;
+  int r1 = 1;
+  while (r1 + 1 < x.k() && x.v[r1 + 1].specular) ++r1;
+  return r1;
+}
+
+// Emission from x_0 toward x_1: area lights their radiance Le(x_0 -> x_1); delta-position lights their
+// intensity I(x_0 -> x_1), read as sampleLi's I / d^2 at x_1 times d^2 (the position is the light's own,
+// so sampleLi reads no random numbers).
+Color emitted(const PathVertex& light, const PathVertex& next) {
+  float d2;
+  const Vec3 w = unitToward(light.p, next.p, &d2);
+  if (!light.light->deltaPosition()) return light.light->L(light.p, light.ng, light.uv, w);
+  const std::optional<LightLiSample> ls = light.light->sampleLi(next.p, Vec2(0.5f, 0.5f));
+  if (!ls || !(d2 > 0)) return {};
+  return ls->L * d2;
+}
+
+}  // namespace
+
+double lightChainToCanonical(const Path& x, int r0, int r1) {
+  if (r0 == 1 && isDeltaPositionLight(x.v[0])) return 1.0;  // that run stays light-free (path.h)
+  return etendueFactor(x, r0, r1);
+}
+
+PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges)
+    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth), minEdges_(std::max(minEdges, 1)) {
+  for (size_t i = 0; i < scene.lights().size(); ++i) {
+    const Light& l = *scene.lights()[i];
+    const char* type = l.deltaDirection() ? "a directional light"
+                       : l.infinite()     ? "an environment (infinite) light"
+                                          : nullptr;
+    if (type)
+      throw std::invalid_argument(fmt::format("veach-mlt: light {} of the scene is {}; veach-mlt supports area, "
+                                              "point and spot lights only", i, type));
+  }
 }
 
 Color PathSpace::f(const Path& x, Vec2* pRaster) const {
   const int k = x.k();
-  if (k < 1 || k > maxEdges_) return {};
+  if (k < minEdges_ || k > maxEdges_) return {};
   const auto& v = x.v;
   if (v[0].kind != VertexKind::Light || !v[0].light || v[k].kind != VertexKind::Camera) return {};
   for (int i = 1; i < k; ++i)
     if (v[i].kind != VertexKind::Surface || !v[i].bsdf) return {};
+  // A point or spot light seen directly by the lens is a path of measure zero (a point on the film, as
+  // bdpt's s = 1, t = 1 skips it); its f would be an atom the chain cannot weigh against area densities.
+  if (k == 1 && isDeltaPositionLight(v[0])) return {};
   float d2;
-  // Le(x_0 -> x_1)
-  Color F = v[0].light->L(v[0].p, v[0].ng, v[0].uv, unitToward(v[0].p, v[1].p, &d2));
+  // Le(x_0 -> x_1) (a delta-position light: its intensity, the position being a point of counting measure)
+  Color F = emitted(v[0], v[1]);
   if (F.isBlack()) return {};
   // rho(x_i): radiance-form BSDF factors (path.h).
   for (int i = 1; i < k; ++i) {
@@ -112,6 +157,13 @@ Color PathSpace::f(const Path& x, Vec2* pRaster) const {
   const Color We = scene_.camera().We(r, &raster);
   if (We.isBlack()) return {};
   F *= We;
+  // A specular run next to a delta-position light is in the light-free measure (path.h): f carries
+  // G(x_0, x_1) and not G(a, s_1), i.e. the canonical coefficient over the etendue factor.
+  if (const int r1 = deltaLightRunEnd(x); r1 > 0) {
+    const double factor = etendueFactor(x, 1, r1);
+    if (!(factor > 0)) return {};
+    F *= float(1.0 / factor);
+  }
   if (!F.isFinite()) return {};
   if (pRaster) *pRaster = raster;
   return F;
@@ -132,7 +184,7 @@ double PathSpace::eyeStep(const Path& x, int i) const {
   const PathVertex& to = x.v[i];
   float d2;
   const Vec3 w = unitToward(from.p, to.p, &d2);
-  if (!(d2 > 0)) return 0;
+  if (!(d2 > 0) || isDeltaPositionLight(to)) return 0;  // a delta-position light is never hit
   if (from.kind == VertexKind::Camera) {
     Ray r;
     r.o = from.p;

@@ -22,9 +22,22 @@
 // of etendue along the chain converts them (lightChainToCanonical). With refraction, the conversion
 // assumes the chain's two ends lie in the same medium (true for closed dielectric objects).
 //
-// Supported: area lights; pinhole and thin-lens cameras; every BSDF (Dirac lobes are recognised by
-// re-sampling them, see specularLobe). Point, spot, directional and environment lights are rejected at
-// construction (their emission is not an area density).
+// ---- Delta-position lights (point, spot) --------------------------------------------------------------
+// x_0 on such a light is a point of counting measure: its density is the light's selection probability
+// (lightStep(x, 0) = pmf, pdfPos = 1, as bdpt's pdfLightOrigin), Le(x_0 -> x_1) is the intensity I(w) and
+// G(x_0, x_1) has no cosine at x_0. The eye side never reaches it (eyeStep(x, 0) = 0, as bdpt's s = 0
+// strategies), so no move generates, moves or perturbs it except the bidirectional mutation's light side,
+// which re-samples it (and its emitted direction by the light's own sampleLe: pdfDir). A specular run
+// x_1 .. x_r next to such a light cannot use the canonical convention (the delta against x_0's area: x_0
+// has none); that run alone stays in the light-free one (x_1 free, its eye-side end a determined), in
+// which every path with it is generated (from the light: bidir's light side, the caustic perturbation)
+// or kept (the other moves). f then carries G(x_0, x_1) instead of G(a, s_1) (f divides the canonical
+// coefficient by the etendue factor), and lightChainToCanonical is 1 for that run. The path L E (the
+// light seen directly) has measure zero and f = 0 (the bidirectional mutation can propose it).
+//
+// Supported: area, point and spot lights; pinhole and thin-lens cameras; every BSDF (Dirac lobes are
+// recognised by re-sampling them, see specularLobe). Directional and environment lights are rejected at
+// construction, naming the light (a delta direction or a position at infinity: no area or point density).
 #pragma once
 #include <optional>
 #include <vector>
@@ -75,14 +88,17 @@ std::optional<SpecularLobe> specularLobe(const Bsdf& bsdf, const Vec3& woL, cons
 // Path-space functions of one scene and depth limit.
 class PathSpace {
  public:
-  // maxDepth: at most this many edges (-1: kUnlimitedEdges). Throws for unsupported lights.
-  PathSpace(const RenderScene& scene, int maxDepth);
+  // maxDepth: at most this many edges (-1: kUnlimitedEdges); minEdges: at least this many (separateDirect:
+  // kDirectMaxSegments + 1, the shorter paths are the direct pass's; f is zero on them). Throws for
+  // unsupported lights.
+  PathSpace(const RenderScene& scene, int maxDepth, int minEdges = 1);
   const RenderScene& scene() const { return scene_; }
   int maxEdges() const { return maxEdges_; }
+  int minEdges() const { return minEdges_; }
   static constexpr int kUnlimitedEdges = 32;
 
   // f(x) in the canonical measure, with visibility; *pRaster: where the path lands. Zero (and no raster)
-  // when invalid: length, a vertex of the wrong kind, a specular vertex without a matching lobe, a
+  // when invalid: length outside [minEdges, maxEdges], a vertex of the wrong kind, a specular vertex without a matching lobe, a
   // blocked edge, the lens edge outside the film.
   Color f(const Path& x, Vec2* pRaster) const;
 
@@ -114,7 +130,11 @@ class PathSpace {
  private:
   const RenderScene& scene_;
   int maxEdges_;
+  int minEdges_;
 };
+
+// x_0 on a point or spot light.
+bool isDeltaPositionLight(const PathVertex& v);
 
 // Geometric term with geometric normals, no visibility.
 float geometry(const PathVertex& a, const PathVertex& b);
@@ -125,7 +145,8 @@ float geometry(const PathVertex& a, const PathVertex& b);
 // s_1 = x.v[r1], s_m = x.v[r0]. Etendue n^2 |cos| dA dw is conserved along a specular chain (equal media
 // at both ends), so G(a, s_1) dA(a) dA(s_1) = G(v, s_m) dA(v) dA(s_m); each vertex
 // scattering about its shading normal ns while areas use ng adds the product (measured: without it the
-// caustic under a smooth-shaded glass sphere came out 25% dark).
+// caustic under a smooth-shaded glass sphere came out 25% dark). 1 for the run next to a delta-position
+// light (r0 = 1), which stays light-free (see above).
 double lightChainToCanonical(const Path& x, int r0, int r1);
 
 }  // namespace veach

@@ -156,7 +156,8 @@ std::optional<StartPath> startPathFromSample(const PathSpace& space, const Integ
       Vertex sampled;
       Vec2 pRaster = cameraRaster;
       const Color C = connectBdpt(scene, source, light, s, camera, t, &sampled, &pRaster);
-      if (C.isBlack()) continue;
+      // separateDirect: the direct pass's paths are not in the chain's space (EvaluatorPssTarget drops them).
+      if (C.isBlack() || segments < space.minEdges()) continue;
       const float w = misWeight(scene, light, s, camera, t, sampled, integrator.heuristic);
       const Color L = C * w;
       if (L.isBlack()) continue;

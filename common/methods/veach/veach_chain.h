@@ -82,7 +82,8 @@ struct StartPath {
 // strictly inside a subpath are specular where bdpt sampled a Dirac lobe there; connection ends are not.
 Path bdptStrategyPath(const Vertex* light, int s, const Vertex* camera, int t, const Vertex& sampled, Vec2 uLens);
 // Replays the bdpt sample of `source` (the bootstrap's candidate) and picks one strategy in proportion to
-// lum(w C) with uPick in [0,1). nullopt if no strategy carries light or the chosen path has f = 0.
+// lum(w C) with uPick in [0,1); strategies of fewer than space.minEdges() segments are left out of both
+// (separateDirect, as the bootstrap's target leaves them out). nullopt if no strategy carries light or the chosen path has f = 0.
 std::optional<StartPath> startPathFromSample(const PathSpace& space, const IntegratorSettings& integrator,
                                              SampleSource& source, double uPick);
 

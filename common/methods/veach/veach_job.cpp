@@ -84,8 +84,9 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
                             const MutationSettings& mutations) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
+  if (isDirectUnit(unit)) return runDirectUnit(scene, plan, unit);  // separateDirect: bdpt, as for every method
   if (unit.mutations == 0) throw std::invalid_argument("veach-mlt: work unit " + std::to_string(unit.index) + " has no mutations");
-  const PathSpace space(scene, s.integrator.maxDepth);
+  const PathSpace space(scene, s.integrator.maxDepth, chainMinLength(s.separateDirect));
 
   // Start: replay the candidate, then pick one of its strategies.
   Pcg32 pick = chainRng(s.seed, unit.index, 3);

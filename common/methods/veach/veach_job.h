@@ -15,7 +15,16 @@
 // beside their mutations (veachBSamples of them per chain; chainRng-independent stream of their own),
 // kept in largeStepSums as the other methods keep their large steps' (develop.h (D3)-(D5)).
 // Develop: (D1) of common/mlt/develop.h, b * P / M with that b.
-// Not supported yet: separateDirect (throws), Kelemen MIS splatting (ignored: expected values).
+// separateDirect (veach-mlt-lecture-cmu: "estimate direct illumination with standard methods ... and apply
+// MLT only for indirect illumination"): paths
+// of at most kDirectMaxSegments segments are rendered by the shared direct pass (bdpt sample batches after
+// the chains: isDirectUnit / runDirectUnit of mlt_job.h, layer 0, P / N at develop). The chains' space is
+// the longer paths only (PathSpace minEdges = chainMinLength(true): f = 0 on the shorter, so moves to them
+// are rejected), and their b, bootstrap candidates and start strategies leave the direct paths out as
+// mmlt's do (EvaluatorPssTarget with separateDirect; startPathFromSample skips those strategies).
+// Scenes: area, point and spot lights (path.h: a point or spot light is x_0 of counting measure);
+// directional and environment lights are refused at plan time, naming the light.
+// Not supported: Kelemen MIS splatting (ignored: expected values).
 #pragma once
 #include <string>
 #include <vector>

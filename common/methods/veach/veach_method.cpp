@@ -50,7 +50,7 @@ veach::MutationSettings VeachMltMethod::mutationSettings(const RenderSettings& s
 void VeachMltMethod::validate(const RenderSettings& s) const {
   RenderMethod::validate(s);
   validateChainWorkSettings(s);
-  if (s.separateDirect) throw std::invalid_argument("settings: veach-mlt does not support separateDirect yet");
+  validateSeparateDirect(*this, s);
   const veach::MutationSettings m = mutationSettings(s);
   double sum = 0;
   for (double w : m.weight) sum += w;
@@ -83,8 +83,10 @@ double VeachMltMethod::candidateCost(const RenderSettings& settings) const {
 }
 
 std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
-  // pssmlt-bdpt's target: c(u) of a bdpt sample, whose mean is b = integral of lum f over path space.
-  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator), false);
+  // pssmlt-bdpt's target: c(u) of a bdpt sample, whose mean is b = integral of lum f over path space
+  // (separateDirect: over the paths of more than kDirectMaxSegments segments, the chains' PathSpace).
+  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator),
+                                              settings.separateDirect);
 }
 
 std::unique_ptr<ChainState> VeachMltMethod::makeState(KelemenSource&, const RenderSettings&) const {
