@@ -163,6 +163,26 @@ TEST_F(Cli, SampleRenderSummaryNamesTheMethodAndItsSamples) {
   EXPECT_NE(r.output.find("pt: 512 samples in "), std::string::npos) << r.output;
 }
 
+// --farm-dir keeps the local farm's state and logs; a directory holding another farm's state is refused
+// (its coordinator would resume the jobs there), and so is --farm-dir on a render that runs in-process.
+TEST_F(Cli, FarmDirKeepsTheLocalFarmsLogsAndRefusesAUsedDirectory) {
+  const fs::path dir = tempDir() / "farm-dir";
+  fs::remove_all(dir);
+  const fs::path out = tempDir() / "farm_dir.exr";
+  const std::string job = "render " + kScenes + "cornell-box.xml --method pt --spp 1 --width 16 --height 16 --threads 1 ";
+  const RunResult r = run(job + "--farm-dir " + dir.string() + " -o " + out.string());
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_TRUE(fs::is_regular_file(dir / "coordinator.log"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "worker-0.log"));
+  const RunResult again = run(job + "--farm-dir " + dir.string() + " -o " + out.string());
+  EXPECT_NE(again.exitCode, 0);
+  EXPECT_NE(again.output.find("--farm-dir " + dir.string() + ": not empty"), std::string::npos) << again.output;
+  const RunResult inProcess = run(job + "--in-process --farm-dir " + (tempDir() / "unused").string() + " -o " + out.string());
+  EXPECT_NE(inProcess.exitCode, 0);
+  EXPECT_NE(inProcess.output.find("--farm-dir is for the local farm"), std::string::npos) << inProcess.output;
+}
+
 bool sameBits(const ExrImage& a, const ExrImage& b) {
   if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return false;
   for (size_t i = 0; i < a.rgb.size(); ++i)
