@@ -237,6 +237,20 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
   EXPECT_EQ(quiet.output.find("mutations/s"), std::string::npos) << quiet.output;
 }
 
+// -q silences the bootstrap's info lines too (they printed through -q before); a warning would still show.
+TEST_F(Cli, QuietRenderPrintsNoSummaryAndNoLogLines) {
+  const fs::path out = tempDir() / "quiet.exr";
+  const RunResult loud = run("render " + kScenes + "cornell-box.xml" + kSmallMmlt + "--mutations-per-pixel 1 -o " + out.string());
+  ASSERT_EQ(loud.exitCode, 0) << loud.output;
+  EXPECT_NE(loud.output.find("bootstrap"), std::string::npos) << loud.output;  // the check below can fail
+  const RunResult quiet = run("render " + kScenes + "cornell-box.xml" + kSmallMmlt + "--mutations-per-pixel 1 -q -o " + out.string());
+  ASSERT_EQ(quiet.exitCode, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("bootstrap"), std::string::npos) << quiet.output;
+  EXPECT_EQ(quiet.output.find("mutations/s"), std::string::npos) << quiet.output;
+  EXPECT_NE(quiet.output.find("warning: the relative standard error of b"), std::string::npos)  // 1 mutation per pixel
+      << quiet.output;
+}
+
 TEST_F(Cli, TimeBudgetedMarkovChainRenderIsReproducibleFromItsMutationsPerPixel) {
   const fs::path dir = tempDir();
   const std::string scene = kScenes + "cornell-box.xml";

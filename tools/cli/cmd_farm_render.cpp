@@ -12,7 +12,7 @@
 
 namespace mlt::cli {
 
-void renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std::string& farmDir) {
+ExrImage renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std::string& farmDir) {
   if (o.settings.timeBudgetSeconds > 0 || o.techniqueImages)
     throw std::invalid_argument("--time and --technique-images need --in-process");
   if (!o.outExr.empty()) {  // fail before rendering, not after
@@ -49,8 +49,9 @@ void renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std::st
       if (bar) bar->update(s.tasksDone);
     };
   farm::EmbeddedFarmResult r = farm::runEmbeddedFarm(e);
+  ExrImage img;
   if (!o.outExr.empty()) {  // the PNG with the requested exposure, from the fetched EXR
-    ExrImage img = readExr(o.outExr);
+    img = readExr(o.outExr);
     writePng(png, img.width, img.height, img.rgb, o.exposureStops);
   }
   if (bar) {
@@ -59,6 +60,7 @@ void renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std::st
                   r.status.method.c_str(), r.status.unitsTotal, r.status.tasksTotal, r.seconds, r.startupSeconds);
     bar->finish(line);
   }
+  return img;
 }
 
 }  // namespace mlt::cli

@@ -6,6 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "common/io/exr_io.h"
 #include "common/methods/chain_report.h"
 #include "tools/cli/commands.h"
@@ -29,10 +31,10 @@ struct RenderCliOptions {
 // metadata; the seconds are the farm's wall time, startup and bootstrap included.
 void renderWithLocalFarmAndReport(const LocalRenderOptions& lo, int workers, const std::string& farmDir) {
   const auto start = std::chrono::steady_clock::now();
-  renderWithLocalFarm(lo, workers, farmDir);
+  const ExrImage image = renderWithLocalFarm(lo, workers, farmDir);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!isMarkovChainMethod(lo.settings.method) || lo.outExr.empty()) return;
-  const ChainReport report = chainReportFromMetadata(readExr(lo.outExr).metadata);
+  const ChainReport report = chainReportFromMetadata(image.metadata);
   if (lo.showProgress)
     std::fputs(formatChainSummary(report, -1, seconds, " (local farm wall time, startup and bootstrap included)")
                    .c_str(), stderr);
@@ -67,7 +69,7 @@ CommandRun setupRender(CLI::App& sub) {
   sub.add_flag("--technique-images", o->techniqueImages,
                "bdpt: also write OUT_s<s>_t<t>.exr/.png, one image per technique (s light vertices, t camera "
                "vertices), MIS-weighted so that they sum to the full image");
-  sub.add_flag("-q,--quiet", o->quiet, "No progress bar or summary");
+  sub.add_flag("-q,--quiet", o->quiet, "No progress bar, summary or log lines (warnings and errors still show)");
 
   return [o, settings]() -> int {
     const CommandLineSettings given = settings->settings();
@@ -84,6 +86,7 @@ CommandRun setupRender(CLI::App& sub) {
     lo.outPng = o->png;
     lo.exposureStops = o->exposure;
     lo.showProgress = !o->quiet;
+    if (o->quiet) spdlog::set_level(spdlog::level::warn);  // -q: no bootstrap log lines either (as `eval -q`)
     lo.techniqueImages = o->techniqueImages;
     if (!o->inProcess && o->time == 0 && !lo.techniqueImages)
       renderWithLocalFarmAndReport(lo, o->workers, o->farmDir);
