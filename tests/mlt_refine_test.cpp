@@ -232,7 +232,9 @@ TEST(RefinedB, LargeStepSumsMergeExactlyInAnyGrouping) {
 TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
   const JobPlan plan = planJob(cornell(), settingsFor("mmlt", 17, 8));
   for (const WorkUnit& u : plan.units) {
-    const PartialResult r = runWorkUnit(cornell(), plan, u);
+    PartialResult r = runWorkUnit(cornell(), plan, u);
+    r.foldSplats();  // a chain unit's splats travel sparse (common/film/sparse_splats.h)
+    ASSERT_TRUE(r.film.hasSplatLayer(chainLayer(size_t(u.pathLength)))) << "unit " << u.index;
     for (size_t l = 1; l < r.film.splatLayerCount(); ++l)
       EXPECT_EQ(r.film.hasSplatLayer(l), l == chainLayer(size_t(u.pathLength))) << "unit " << u.index << " layer " << l;
   }
