@@ -11,6 +11,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <fmt/format.h>
 
 namespace mlt::wire {
@@ -399,6 +400,10 @@ Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFin
 }
 
 v1::PartialHeader partialHeader(const PartialResult& r) {
+  // What goes on the wire is a merged result (a task's, or a job's): its splats are all in `film`. A unit's
+  // pending sparse splats here would be lost, so refuse rather than send a film without them.
+  if (!r.splats.empty())
+    throw std::logic_error("partialHeader: the result still holds sparse splats; fold them (PartialResult::foldSplats) first");
   v1::PartialHeader h;
   h.set_format_version(kFormatVersion);
   h.set_width(r.film.width());

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "common/farm/tasks.h"
+#include "common/film/sparse_splats.h"
 #include "coordinator/result_store.h"
 #include "proto/convert.h"
 #include "proto/sparse_film.h"
@@ -158,6 +159,18 @@ TEST(FarmLayer, MoveSecondsTravelWithThePartialAndBadOnesAreRefused) {
       EXPECT_NE(std::string(e.what()).find("seconds_per_kind"), std::string::npos) << e.what();
     }
   }
+}
+
+// A unit's sparse splats (common/film/sparse_splats.h) never travel: only merged results, whose splats are
+// in their film, go on the wire; one still holding splats is refused instead of sent without them.
+TEST(FarmLayer, AResultWithPendingSparseSplatsIsNotSent) {
+  PartialResult r = somePartial();
+  SparseSplatter splatter(r.film.width(), r.film.height(), 1);
+  splatter.addSplat({0.5f, 0.5f}, Color(1));
+  r.splats = splatter.take();
+  EXPECT_THROW(wire::partialHeaderBytes(r), std::logic_error);
+  r.foldSplats();
+  EXPECT_NO_THROW(wire::partialHeaderBytes(r));
 }
 
 TEST(FarmLayer, TasksAreBoundedByTheirFilmTraffic) {
