@@ -9,6 +9,7 @@ namespace mlt {
 
 void SparseSplats::addTo(Film& film) const {
   if (empty()) return;
+  if (film.pixelCount() == 0) film = Film(width, height);
   if (film.width() != width || film.height() != height)
     throw std::invalid_argument("SparseSplats::addTo: film size mismatch " + std::to_string(film.width()) + "x" +
                                 std::to_string(film.height()) + " vs " + std::to_string(width) + "x" +
@@ -51,13 +52,16 @@ SparseSplatter::SparseSplatter(int width, int height, uint32_t layer) : width_(w
   list_->clear();
 }
 
-SparseSplatter::~SparseSplatter() {
-  // Leave the scratch zero for the next unit even if this one was abandoned (an exception in the chain).
+void SparseSplatter::clearScratch() {
   for (uint32_t i : *list_) {
     dense_[i] = RGBd{};
     touched_[i] = 0;
   }
   list_->clear();
+}
+
+SparseSplatter::~SparseSplatter() {
+  clearScratch();  // zero for the next unit even if this one was abandoned (an exception in the chain)
   scratch_->inUse = false;
   if (owned_) delete scratch_;
 }
@@ -72,13 +76,8 @@ SparseSplats SparseSplatter::take() {
   std::sort(list_->begin(), list_->end());
   l.index = *list_;
   l.value.resize(l.index.size());
-  for (size_t j = 0; j < l.index.size(); ++j) {
-    const uint32_t i = l.index[j];
-    l.value[j] = dense_[i];
-    dense_[i] = RGBd{};
-    touched_[i] = 0;
-  }
-  list_->clear();
+  for (size_t j = 0; j < l.index.size(); ++j) l.value[j] = dense_[l.index[j]];
+  clearScratch();
   nonFinite_ = 0;
   return out;
 }

@@ -33,8 +33,9 @@ struct SparseSplats {
   uint64_t nonFinite = 0;         // splats dropped as non-finite
 
   bool empty() const { return width == 0 && height == 0; }
-  // film += these splats: allocates every listed layer (even one without pixels, as a dense unit film
-  // had it) and adds nonFinite. Throws std::invalid_argument if the film's size differs.
+  // film += these splats: an empty (0 x 0) film first becomes a zero film of their size; allocates every
+  // listed layer (even one without pixels, as a dense unit film had it) and adds nonFinite. Throws
+  // std::invalid_argument if the film's size differs.
   void addTo(Film& film) const;
 };
 
@@ -64,6 +65,7 @@ class SparseSplatter {
   SparseSplats take();
 
  private:
+  void clearScratch();  // the listed pixels back to zero, the list empty
   int width_, height_;
   uint32_t layer_;
   uint64_t nonFinite_ = 0;

@@ -55,9 +55,8 @@ void PartialResult::add(const PartialResult& o) {
     throw std::invalid_argument("PartialResult::add: film size mismatch");
 
   if (emptyFilm && o.film.pixelCount() > 0) film = o.film;
-  else if (emptyFilm && !o.splats.empty()) film = Film(o.splats.width, o.splats.height);
   else if (o.film.pixelCount() > 0) film.merge(o.film);
-  o.splats.addTo(film);
+  o.splats.addTo(film);  // an empty film first becomes one of the splats' size
   samples += o.samples;
   stats.add(o.stats);
   if (after) {
@@ -72,8 +71,6 @@ void PartialResult::add(const PartialResult& o) {
 }
 
 void PartialResult::foldSplats() {
-  if (splats.empty()) return;
-  if (film.pixelCount() == 0) film = Film(splats.width, splats.height);
   splats.addTo(film);
   splats = SparseSplats{};
 }
