@@ -42,8 +42,11 @@ if [[ "${PAGE_ONLY:-0}" != "1" ]]; then
     rm -rf "$out"
     mkdir -p "$out"
     ln -s "$(realpath "$WORK/refs")" "$out/refs"
+    local file=""
+    for f in scenes/"$1".xml scenes/"$1".pbrt; do [[ -f "$f" ]] && file=$f && break; done
+    if [[ -z "$file" ]]; then echo "make-results.sh: no scenes/$1.xml or scenes/$1.pbrt" >&2; exit 2; fi
     echo "== $1 $2: $3 at $4 s ($(date -u +%H:%M:%S))"
-    "${PIN[@]}" "$BUILD/tools/mltfarm" eval --scenes "scenes/$1.xml" --methods "$3" --runs "$RUNS" \
+    "${PIN[@]}" "$BUILD/tools/mltfarm" eval --scenes "$file" --methods "$3" --runs "$RUNS" \
       --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$REF_SPP" \
       --no-maps --no-charts -q --out "$out"
   }
