@@ -38,7 +38,8 @@ using Clock = std::chrono::steady_clock;
 constexpr int kTimeOnlySppCap = 1 << 16;
 
 // Time-budgeted Markov chains (see planChainsForTimeBudget).
-constexpr double kTrialShare = 0.07;          // share of the budget spent measuring mutation throughput
+constexpr double kTrialShare = 0.07;          // share of the budget spent measuring mutation throughput,
+constexpr double kTrialMaxSeconds = 1.0;      // at most this long (a longer trial measures no better)
 constexpr uint64_t kTrialUnitMutations = 8192;  // a trial unit: this long a prefix of a planned chain
 constexpr double kBudgetFill = 0.95;          // share of the remaining budget planned (develop, write, tail)
 constexpr int kMutationsPerPixelDigits = 3;   // the chosen mutations per pixel, rounded down to this many
@@ -70,7 +71,8 @@ double roundDownSignificant(double x, int digits) {
 //   1. bootstrap once, sized to its share of the budget (a pure function of the seed and settings with the
 //      bootstrap size resolved, independent of the mutation count);
 //   2. measure mutation throughput on every thread with prefixes of the planned chains, for about
-//      kTrialShare of the budget (their results are discarded: the trial never touches the image);
+//      kTrialShare of the budget, at most kTrialMaxSeconds (their results are discarded: the trial never
+//      touches the image);
 //   3. choose mutations per pixel to fill what remains of the budget (rounded down to 3 digits; less the
 //      estimated time of a separateDirect direct pass), plan again from the same bootstrap, and run every
 //      chain of that plan.
@@ -81,8 +83,10 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   s.height = scene.camera().height();
   const double budget = s.timeBudgetSeconds;
   // 1. The bootstrap gets kBootstrapShare of the budget (mlt_job.h): a probe of the smallest automatic size
-  //    measures the candidates' throughput, and the count that fits is resolved into the settings (and
-  //    recorded in the image, so that --bootstrap with it reproduces the image without a budget).
+  //    measures the candidates' throughput, and the count that fits in what the probe left of that share
+  //    is resolved into the settings (and recorded in the image, so that --bootstrap with it reproduces
+  //    the image without a budget). The probe is part of the share: probe + bootstrap ~ kBootstrapShare,
+  //    or the probe alone when it took the whole share (short budgets, expensive candidates).
   const ChainJobSpec* method = findChainJobSpec(s.method);
   if (!method) throw std::invalid_argument("--time: method " + s.method + " has no time-budgeted planning yet");
   MarkovChainBootstrap boot;
@@ -90,10 +94,11 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     RenderSettings probe = s;
     probe.bootstrapSamples = int(kMinBootstrapPerLength);
     boot = bootstrapMarkovChainJob(scene, probe);
-    const double perSecond = double(boot.result.candidates) / std::max(boot.result.seconds, 1e-6);
-    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, kBootstrapShare * budget * perSecond));
+    const double probeSeconds = boot.result.seconds;
+    const double perSecond = double(boot.result.candidates) / std::max(probeSeconds, 1e-6);
+    const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds);
+    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
-      const double probeSeconds = boot.result.seconds;
       boot = bootstrapMarkovChainJob(scene, s);
       boot.result.seconds += probeSeconds;
     }
@@ -124,7 +129,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   // 2. Throughput trial.
   const auto trialStart = Clock::now();
   const auto trialEnd = trialStart + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(kTrialShare * budget));
+                                         std::chrono::duration<double>(std::min(kTrialShare * budget, kTrialMaxSeconds)));
   uint64_t trialMutations = 0;
   runPipeline(
       size_t(2 * threads),
