@@ -266,7 +266,7 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   EXPECT_EQ(plan.norm.bootstrapSamples, kMinBootstrapPerLength);
 }
 
-// A bootstrap candidate of veach-mlt is a whole bdpt sample, 3-6 of its mutations: the count-sized
+// A bootstrap candidate of veach-mlt is a whole bdpt sample, 3-10 of its mutations: the count-sized
 // bootstrap holds 1 / candidateCost of the candidates pssmlt-bdpt's holds at the same settings (the same share of
 // the job's time; the results page measured veach-mlt's bootstrap at 13-25% of the job before this).
 TEST(BootstrapSize, CandidatesAreSizedByTheirCostInMutations) {

@@ -27,7 +27,7 @@ constexpr int kStartTries = 16;            // a start strategy whose path evalua
 // evaluates one independent bootstrap candidate (a bdpt sample: c(u) = lum of its MIS-weighted strategies,
 // whose mean is b) per kMutationsPerBSample mutations, from a stream of its own (never the plan's
 // candidates), and keeps their sums where the other methods keep their large steps' (largeStepSums), merged
-// and quantized alike. A candidate costs ~3-6 mutations (VeachMltMethod::candidateCost), so this is ~8% of
+// and quantized alike. A candidate costs ~3-8 mutations (VeachMltMethod::candidateCost), so this is ~8% of
 // the chain's time; it lets the bootstrap stay at kBootstrapShare of the job and b still tighten with it.
 constexpr uint64_t kMutationsPerBSample = 64;
 // The bootstrap chose a candidate whose every strategy rebuilds to a path with f = 0 in path space (seen
