@@ -153,9 +153,11 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     throw WireError("settings.samples", fmt::format("method {} needs sample settings", s.method));
   const v1::SampleSettings& samples = chainMethod ? p.chains().direct() : p.samples();
   const std::string sp = chainMethod ? "settings.chains.direct" : "settings.samples";
-  if (!chainMethod || p.chains().separate_direct() || samples.spp() != 0) {
+  if (!chainMethod || samples.spp() != 0) {
     requireRange((sp + ".spp").c_str(), samples.spp(), 1, kMaxSpp);
     s.spp = int(samples.spp());
+  } else if (p.chains().separate_direct()) {
+    s.spp = 0;  // the direct pass sized by the plan (directSppFor)
   }
   requireRange((sp + ".samples_per_unit").c_str(), samples.samples_per_unit(), 0, kMaxSpp);
   s.samplesPerUnit = int(samples.samples_per_unit());

@@ -166,6 +166,21 @@ TEST(CliSettings, WithoutOptionsTheSettingsAreTheDefaultsAndNothingIsGiven) {
   EXPECT_FALSE(given.hasRrDepth);
 }
 
+// --separate-direct without --spp leaves the direct pass to the plan (spp 0, directSppFor), in render and
+// submit alike; with --spp it is the value typed.
+TEST(CliSettings, SeparateDirectWithoutSppLeavesTheDirectPassToThePlan) {
+  const std::vector<std::string> args{"-m", "mmlt", "--separate-direct", "--mutations-per-pixel", "20"};
+  const CommandLineSettings r = parseRender(args), s = parseSubmit(args);
+  expectSame(r, s);
+  EXPECT_EQ(s.settings.spp, 0);
+  EXPECT_FALSE(s.hasSpp);
+  EXPECT_EQ(wire::fromProto(onTheWire(s)).settings.spp, 0);  // the wire carries "sized by the plan"
+  std::vector<std::string> withSpp = args;
+  withSpp.insert(withSpp.end(), {"--spp", "7"});
+  EXPECT_EQ(parseSubmit(withSpp).settings.spp, 7);
+  EXPECT_EQ(parseSubmit({"-m", "mmlt"}).settings.spp, RenderSettings{}.spp);  // no direct pass: untouched
+}
+
 // The error of `mltfarm CMD args`: CLI11's parse error or the group's own check, whichever comes first.
 std::string errorOf(const std::string& command, const std::vector<std::string>& settingsArgs) {
   Command c(command);

@@ -248,6 +248,14 @@ TEST(EvalHarness, MethodSpecs) {
   EXPECT_THROW(parseMethodSpec("nope"), std::invalid_argument);
   EXPECT_THROW(parseMethodSpec("x=pt*abc"), std::invalid_argument);
   EXPECT_THROW(parseMethodSpec("=pt"), std::invalid_argument);
+  const MethodSpec sd = parseMethodSpec("mmlt+separate-direct");
+  EXPECT_EQ(sd.method, "mmlt");
+  EXPECT_EQ(sd.label, "mmlt+separate-direct");
+  EXPECT_TRUE(sd.separateDirect);
+  EXPECT_FALSE(parseMethodSpec("mmlt").separateDirect);
+  EXPECT_TRUE(parseMethodSpec("sd=pssmlt-bdpt+separate-direct*2").separateDirect);
+  EXPECT_THROW(parseMethodSpec("pt+separate-direct"), std::invalid_argument);  // pt has no direct pass apart
+  EXPECT_THROW(parseMethodSpec("pssmlt+separate-direct"), std::invalid_argument);  // its splats carry no length
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 0, 1));
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 1, 0));
 }

@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "common/job/mlt_job.h"
 #include "common/methods/pss_method.h"
 #include "common/methods/registry.h"
 #include "common/methods/chain_report.h"
@@ -125,6 +126,44 @@ TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
     EXPECT_TRUE(sameFilm(sequential.film, grouped.film)) << m.c_str();
     EXPECT_TRUE(sameFilm(sequential.film, reversed.film)) << m.c_str();
   }
+}
+
+// separateDirect without spp (spp = 0): the plan sizes the direct pass from the mutations per pixel, and
+// the plan is the one an explicit spp of that size gives, unit for unit and pixel for pixel. The plan
+// records the resolved spp (an EXR's metadata reproduces the job); a negative spp is refused.
+TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
+  EXPECT_EQ(directSppFor(8), 4);  // ceil(0.4 * 8)
+  EXPECT_EQ(directSppFor(0.01), 1);
+  EXPECT_EQ(directSppFor(100), int(std::ceil(kDirectSppPerMutation * 100)));
+  for (double mpp : {8.0, 30.0}) {
+    RenderSettings s = settingsFor("mmlt", 3);
+    s.separateDirect = true;
+    s.mutationsPerPixel = mpp;
+    s.spp = 0;
+    const JobPlan automatic = planJob(cornell(), s);
+    EXPECT_EQ(automatic.settings.spp, directSppFor(mpp));
+    s.spp = directSppFor(mpp);
+    const JobPlan given = planJob(cornell(), s);
+    ASSERT_EQ(automatic.units.size(), given.units.size());
+    size_t direct = 0;
+    for (size_t i = 0; i < given.units.size(); ++i) {
+      const WorkUnit &a = automatic.units[i], &b = given.units[i];
+      direct += isDirectUnit(b) ? 1 : 0;
+      EXPECT_EQ(a.sampleBegin, b.sampleBegin);
+      EXPECT_EQ(a.sampleEnd, b.sampleEnd);
+      EXPECT_EQ(a.mutations, b.mutations);
+      EXPECT_EQ(a.startCandidate, b.startCandidate);
+    }
+    EXPECT_GT(direct, 0u);
+    PartialResult ra, rb;
+    for (const PartialResult& p : runAll(cornell(), automatic)) ra.add(p);
+    for (const PartialResult& p : runAll(cornell(), given)) rb.add(p);
+    EXPECT_TRUE(sameBytes(developImage(automatic, ra), developImage(given, rb))) << mpp;
+  }
+  RenderSettings bad = settingsFor("mmlt", 3);
+  bad.separateDirect = true;
+  bad.spp = -1;
+  EXPECT_THROW(planJob(cornell(), bad), std::invalid_argument);
 }
 
 TEST(MltJob, ReplayMismatchFailsLoudly) {

@@ -54,8 +54,14 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
   return lengths;
 }
 
+int directSppFor(double mutationsPerPixel) {
+  const double spp = std::ceil(kDirectSppPerMutation * mutationsPerPixel);
+  return std::isfinite(spp) ? int(std::clamp(spp, 1.0, double(1 << 24))) : 1;
+}
+
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
   if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
+  if (s.separateDirect && s.spp == 0) s.spp = directSppFor(s.mutationsPerPixel);
   return s;
 }
 
@@ -194,8 +200,9 @@ void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
   if (!spec.allowsSeparateDirect())
     throw std::invalid_argument("settings: " + spec.name() +
                                 " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
-  if (s.spp < 1)
-    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1, got " + std::to_string(s.spp));
+  if (s.spp < 0)
+    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1 (or 0: sized by the "
+                                "mutations per pixel), got " + std::to_string(s.spp));
 }
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,

@@ -114,7 +114,15 @@ std::vector<double> allocationWeights(const BootstrapResult& boot);
 // The chain's sample-source parameters from resolved settings (large-step probability, kernel; a
 // large-step probability still left to the method is refused by KelemenSource: resolveChainSettings first).
 KelemenParams kelemenParams(const RenderSettings& settings);
-// The settings with the method's defaults filled in where they were left to it (largeStepProb < 0).
+// The direct pass's size when the settings leave it to the plan (separateDirect with spp = 0): this many
+// bdpt samples (of at most kDirectMaxSegments segments) per mutation per pixel, rounded up, at least 1.
+// Measured on the Cornell box at 16 s (docs/CHAINS.md, "--separate-direct"): the split minimizing the sum
+// of the two parts' variances put ~26% of the time in the direct pass, 158 samples for 376 mutations per
+// pixel. A ratio, not a share of time: the image stays a pure function of (settings, mutations per pixel).
+constexpr double kDirectSppPerMutation = 0.4;
+int directSppFor(double mutationsPerPixel);
+// The settings with the method's defaults filled in where they were left to it (largeStepProb < 0; the
+// direct pass's spp with separateDirect and spp = 0: directSppFor(mutationsPerPixel)).
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings settings);
 // The path lengths a job's chains cover ({-1} without chains per length; kMin..maxDepth with them; with
 // unlimited depth the first block, to which the bootstrap adds).
@@ -134,8 +142,8 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
 // >= 0, bootstrap samples 0 or >= 2); throws std::invalid_argument naming the setting.
 void validateChainWorkSettings(const RenderSettings& settings);
 void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings& settings);
-// separateDirect: the method can leave out the direct light and the direct pass has spp >= 1; throws
-// std::invalid_argument naming the setting.
+// separateDirect: the method can leave out the direct light and the direct pass has spp >= 1 or 0 (sized
+// by the plan, directSppFor); throws std::invalid_argument naming the setting.
 void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& settings);
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
                                              const RenderSettings& settings);

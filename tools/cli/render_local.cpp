@@ -117,13 +117,19 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   }
   if (trialUnits.empty()) return trialPlan;  // b = 0: no chains to run, whatever the budget
 
-  // The direct pass (separateDirect) takes its share of the budget first: one of its units, timed.
-  double directSeconds = 0;
+  // The direct pass (separateDirect) takes its share of the budget first: one of its units, timed. Sized
+  // by the plan (spp 0: directSppFor), it grows with the mutations per pixel, so its time per mutation per
+  // pixel joins the chains' in step 3 instead.
+  double directSeconds = 0, directSecondsPerMpp = 0;
   if (!directUnits.empty()) {
     const auto t0 = Clock::now();
     runWorkUnit(scene, trialPlan, directUnits.front());
     directSeconds = std::chrono::duration<double>(Clock::now() - t0).count() * double(directUnits.size()) /
                     double(std::max(threads, 1));
+    if (s.spp == 0) {
+      directSecondsPerMpp = directSeconds / double(trialPlan.settings.spp) * kDirectSppPerMutation;
+      directSeconds = 0;
+    }
   }
 
   // 2. Throughput trial.
@@ -151,8 +157,8 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     remaining = report.trialSeconds;
   }
   const double P = double(s.width) * double(s.height);
-  const double mpp = roundDownSignificant(kBudgetFill * remaining * report.mutationsPerSecond / P,
-                                          kMutationsPerPixelDigits);
+  const double secondsPerMpp = P / std::max(report.mutationsPerSecond, 1e-9) + directSecondsPerMpp;
+  const double mpp = roundDownSignificant(kBudgetFill * remaining / secondsPerMpp, kMutationsPerPixelDigits);
   s.mutationsPerPixel = std::max(mpp, 1.0 / P);  // at least one mutation
   report.mutationsPerPixel = s.mutationsPerPixel;
   return planMarkovChainJob(scene, s, boot);
@@ -207,7 +213,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   settings.integrator.rrDepth = options.rrDepth.value_or(desc.rrDepth.value_or(settings.integrator.rrDepth));
   const bool timed = settings.timeBudgetSeconds > 0;
   // Without --spp: the scene's sampler sample_count, if it has one (and no time budget was given).
-  if (!options.sppGiven && !timed && desc.sampleCount) settings.spp = *desc.sampleCount;
+  if (!options.sppGiven && !timed && desc.sampleCount && !settings.separateDirect) settings.spp = *desc.sampleCount;
   if (timed && !options.sppGiven && !isMarkovChainMethod(settings.method)) {
     settings.spp = kTimeOnlySppCap;
     if (settings.samplesPerUnit == 0) settings.samplesPerUnit = 1;

@@ -62,8 +62,8 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       ->capture_default_str()
       ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
   add_flag("--separate-direct", separateDirect_,
-           "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples) and let the chains do "
-           "only the longer ones (Veach's refinement)");
+           "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples; without --spp "
+           "0.4 per mutation per pixel, rounded up) and let the chains do only the longer ones (Veach's refinement)");
   maxDepthOpt_ = add_option("--max-depth", maxDepth_,
                             "Maximum path length in segments (edges): 1 = directly visible emitters "
                             "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
@@ -129,6 +129,9 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.gaussianSigma = sigma_;
   s.splatting = splatting_ == "kelemen-mis" ? MltSplatting::KelemenMIS : MltSplatting::ExpectedValue;
   s.separateDirect = separateDirect_;
+  // The direct pass without --spp: sized by the plan from the mutations per pixel (directSppFor), also under
+  // a time budget; the scene's sampler sample_count is meant for pt and bdpt.
+  if (s.separateDirect && !out.hasSpp) s.spp = 0;
   // Given depths go into the settings too; unset ones keep IntegratorSettings' defaults and are resolved
   // against the scene's <integrator> by whoever loads it (the in-process renderer or the coordinator).
   out.hasMaxDepth = maxDepthOpt_->count() > 0;

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "common/core/rng.h"
+#include "common/methods/pss_method.h"
 #include "common/io/png_io.h"
 #include "common/render/render_scene.h"
 #include "tools/eval/error_map.h"
@@ -48,8 +49,16 @@ MethodSpec parseMethodSpec(const std::string& spec) {
     if (!(m.testScale > 0)) throw std::invalid_argument("method spec '" + spec + "': scale must be positive");
     rest = rest.substr(0, star);
   }
-  m.method = findMethod(rest).name();
   if (m.label.empty()) m.label = rest;
+  const std::string kSeparateDirect = "+separate-direct";
+  if (rest.size() > kSeparateDirect.size() && rest.ends_with(kSeparateDirect)) {
+    rest.resize(rest.size() - kSeparateDirect.size());
+    m.separateDirect = true;
+    const ChainJobSpec* chain = findChainJobSpec(rest);
+    if (!chain || !chain->allowsSeparateDirect())
+      throw std::invalid_argument("method spec '" + spec + "': " + rest + " cannot render the direct light apart");
+  }
+  m.method = findMethod(rest).name();
   return m;
 }
 
@@ -157,6 +166,10 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   const int largest = int(cfg.budgets.size()) - 1;
   RenderSettings settings = base;
   settings.method = ms.method;
+  if (ms.separateDirect) {
+    settings.separateDirect = true;
+    settings.spp = 0;  // the direct pass sized by the plan from the work (mutations per pixel)
+  }
   settings.chains = cfg.base.chains;
   settings.samplesPerUnit = cfg.base.samplesPerUnit;
 
