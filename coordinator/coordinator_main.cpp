@@ -26,6 +26,7 @@
 #include "coordinator/crash_point.h"
 #include "coordinator/service.h"
 #include "proto/channel.h"
+#include "common/farm/process_memory.h"
 
 namespace {
 std::binary_semaphore gStop{0};
@@ -33,6 +34,7 @@ void onSignal(int) { gStop.release(); }
 }  // namespace
 
 int main(int argc, char** argv) {
+  mlt::farm::keepFreedMemoryForReuse();  // films come and go per task (process_memory.h)
   CLI::App app{"mltfarm coordinator: accepts render jobs, runs the bootstrap, leases work to workers"};
   mlt::farm::ServerOptions server;
   mlt::farm::CoordinatorOptions opt;

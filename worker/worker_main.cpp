@@ -12,6 +12,7 @@
 #include <cstdlib>
 
 #include "common/farm/metrics_endpoint.h"
+#include "common/farm/process_memory.h"
 #include "worker/worker.h"
 
 namespace {
@@ -22,6 +23,7 @@ void onSignal(int) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  mlt::farm::keepFreedMemoryForReuse();  // films come and go per task (process_memory.h)
   CLI::App app{"mltfarm worker: runs leased chains / sample batches for a coordinator"};
   mlt::farm::WorkerOptions opt;
   std::string logLevel = "info";
