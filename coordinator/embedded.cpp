@@ -50,9 +50,15 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
                          fmt::format("{}/worker-{}.log", result.stateDir, i), false);
   result.startupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  auto shutdown = [&] {
+  bool signalled = false;
+  auto stop = [&] {  // the job is done: SIGTERM to the coordinator also ends the workers' long polls at once
+    if (signalled) return;
+    signalled = true;
     for (auto& w : workers) w.signal(SIGTERM);
-    coord.process.signal(SIGTERM);  // the job is done: also ends the workers' long polls at once
+    coord.process.signal(SIGTERM);
+  };
+  auto shutdown = [&] {
+    stop();
     for (auto& w : workers) w.terminate(std::chrono::seconds(10));
     coord.process.terminate(std::chrono::seconds(10));
   };
@@ -68,6 +74,8 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
     if (!o.outPng.empty()) client.fetch(st.jobId, o.outPng, "png");
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted).count();
     result.status = st;
+    stop();
+    if (o.afterFetch) o.afterFetch();
   } catch (const RpcError& e) {
     shutdown();
     throw std::runtime_error(e.message());  // the coordinator's message (e.g. the scene loader's)

@@ -20,6 +20,9 @@ struct EmbeddedFarmOptions {
   std::string stateDir;          // empty: a temporary directory, removed afterwards
   bool keepLogs = false;         // keep the temporary directory (logs) even on success
   std::function<void(const JobStatus&)> onStatus;  // progress (WatchJob stream)
+  // Runs once the image is fetched, while the coordinator and the workers, already told to stop, exit
+  // (e.g. the caller's PNG from OUT.exr): their shutdown overlaps it instead of preceding it.
+  std::function<void()> afterFetch;
 };
 
 struct EmbeddedFarmResult {

@@ -48,12 +48,13 @@ ExrImage renderWithLocalFarm(const LocalRenderOptions& o, int workers, const std
         bar = std::make_unique<ProgressBar>(std::string("render ") + s.method + " (local farm)", s.tasksTotal);
       if (bar) bar->update(s.tasksDone);
     };
-  farm::EmbeddedFarmResult r = farm::runEmbeddedFarm(e);
   ExrImage img;
-  if (!o.outExr.empty()) {  // the PNG with the requested exposure, from the fetched EXR
-    img = readExr(o.outExr);
-    writePng(png, img.width, img.height, img.rgb, o.exposureStops);
-  }
+  if (!o.outExr.empty())
+    e.afterFetch = [&] {  // the PNG with the requested exposure, from the fetched EXR, while the farm exits
+      img = readExr(o.outExr);
+      writePng(png, img.width, img.height, img.rgb, o.exposureStops);
+    };
+  farm::EmbeddedFarmResult r = farm::runEmbeddedFarm(e);
   if (bar) {
     char line[256];
     std::snprintf(line, sizeof line, "%s: %u work units in %u tasks on the local farm in %.2f s (startup %.2f s)",
