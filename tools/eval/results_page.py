@@ -26,6 +26,10 @@ HARD_SCENES = ("caustic-mirror", "door-ajar", "glossy-plates")
 CHAIN_METHODS = ("pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt", "veach-mlt")
 
 
+def is_chain(label):  # a method label, also METHOD+separate-direct (the harness's method spec)
+    return label.split("+")[0] in CHAIN_METHODS
+
+
 def read_csv(path):
     if not os.path.exists(path):
         return [], None
@@ -185,7 +189,7 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
         x = g[(m, bd)]
         mu, _ = mean_std(x.mean_err)
         worst = max(x.mean_err, key=abs)
-        share = "%.1f%%" % (100 * max(x.plan_share)) if x.plan_share and m in CHAIN_METHODS else "-"
+        share = "%.1f%%" % (100 * max(x.plan_share)) if x.plan_share and is_chain(m) else "-"
         flags = "; ".join(sorted({f for r in x.flagged for f in r["flags"].split(";")}))
         lines.append("| %s | %s | %s | %s | %.0f | %.3g M | %s | %d/%d %s |" % (
             m, pct(mu), pct(worst), ", ".join("%+.2f" % (100 * e) for e in x.mean_err), mean_std(x.work)[0],
@@ -245,7 +249,7 @@ def targets_section(all_groups, refs, budgets):
             continue
         g, methods = all_groups[scene]
         for b in budgets:
-            chains = [(g[(m, b)].rel_ms()[0], m) for m in methods if m in CHAIN_METHODS and (m, b) in g]
+            chains = [(g[(m, b)].rel_ms()[0], m) for m in methods if is_chain(m) and (m, b) in g]
             if not chains or ("pt", b) not in g or ("bdpt", b) not in g:
                 continue
             e, m = min(chains)
@@ -256,7 +260,7 @@ def targets_section(all_groups, refs, budgets):
     lines.append("")
     # 4. Bootstrap share.
     shares = [(max(x.plan_share), scene, m, b) for scene, (g, _) in all_groups.items()
-              for (m, b), x in g.items() if m in CHAIN_METHODS and x.plan_share]
+              for (m, b), x in g.items() if is_chain(m) and x.plan_share]
     if shares:
         s, scene, m, b = max(shares)
         lines.append("**Bootstrap share** (target: at most 5%% of every job): largest %.1f%% (%s, %s, %g s)."
