@@ -132,7 +132,7 @@ TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
 // the plan is the one an explicit spp of that size gives, unit for unit and pixel for pixel. The plan
 // records the resolved spp (an EXR's metadata reproduces the job); a negative spp is refused.
 TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
-  EXPECT_EQ(directSppFor(8), 4);  // ceil(0.4 * 8)
+  EXPECT_EQ(directSppFor(8), int(std::ceil(kDirectSppPerMutation * 8)));
   EXPECT_EQ(directSppFor(0.01), 1);
   EXPECT_EQ(directSppFor(100), int(std::ceil(kDirectSppPerMutation * 100)));
   for (double mpp : {8.0, 30.0}) {

@@ -116,10 +116,10 @@ std::vector<double> allocationWeights(const BootstrapResult& boot);
 KelemenParams kelemenParams(const RenderSettings& settings);
 // The direct pass's size when the settings leave it to the plan (separateDirect with spp = 0): this many
 // bdpt samples (of at most kDirectMaxSegments segments) per mutation per pixel, rounded up, at least 1.
-// Measured on the Cornell box at 16 s (docs/CHAINS.md, "--separate-direct"): the split minimizing the sum
-// of the two parts' variances put ~26% of the time in the direct pass, 158 samples for 376 mutations per
-// pixel. A ratio, not a share of time: the image stays a pure function of (settings, mutations per pixel).
-constexpr double kDirectSppPerMutation = 0.4;
+// Measured on the Cornell box at 256x256, 16 s, 5 seeds each (docs/CHAINS.md, "--separate-direct"):
+// relMSE 1.95e-3 with 0.25, 2.20e-3 with 0.4, 2.33e-3 with 0.7, 2.58e-3 with 1.2 (mmlt without the pass:
+// 3.02e-3). A ratio, not a share of time: the image stays a pure function of (settings, mutations per pixel).
+constexpr double kDirectSppPerMutation = 0.25;
 int directSppFor(double mutationsPerPixel);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0; the
 // direct pass's spp with separateDirect and spp = 0: directSppFor(mutationsPerPixel)).

@@ -63,7 +63,7 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
   add_flag("--separate-direct", separateDirect_,
            "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples; without --spp "
-           "0.4 per mutation per pixel, rounded up) and let the chains do only the longer ones (Veach's refinement)");
+           "0.25 per mutation per pixel, rounded up) and let the chains do only the longer ones (Veach's refinement)");
   maxDepthOpt_ = add_option("--max-depth", maxDepth_,
                             "Maximum path length in segments (edges): 1 = directly visible emitters "
                             "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
