@@ -197,8 +197,10 @@ TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   const auto box = RenderScene::build(test::smallCornellBox(16, 16));
   RenderSettings s = smallSettings();
   s.separateDirect = true;
-  s.spp = 0;  // the direct pass would have no samples
+  s.spp = -1;  // not a size (0 is: the plan sizes the direct pass, directSppFor)
   EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
+  s.spp = 0;
+  EXPECT_EQ(veach::planVeachJob(*box, s).settings.spp, directSppFor(s.mutationsPerPixel));
   // Point and spot lights are supported (path.h); directional and environment lights are refused, the
   // message naming the light and its type.
   const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));
