@@ -74,7 +74,9 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
           s.mutationsPerPixel, s.bootstrapSamples,
           s.largeStepProb >= 0 ? fmt::format(" --large-step {}", s.largeStepProb) : std::string(), s.chains,
           s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen", s.kelemenS1, s.kelemenS2, s.gaussianSigma);
-    else
+    if (isMarkovChainMethod(s.method) && s.separateDirect)  // METHOD+separate-direct; spp 0: sized by the plan
+      cmd += s.spp > 0 ? fmt::format(" --separate-direct --spp {}", s.spp) : std::string(" --separate-direct");
+    else if (!isMarkovChainMethod(s.method))
       cmd += fmt::format(" --spp {}", s.spp);
     if (threads > 0) cmd += fmt::format(" --threads {}", threads);
     for (const auto& [k, v] : defines) cmd += " -D " + shellQuote(k + "=" + v);
