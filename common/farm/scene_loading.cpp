@@ -31,8 +31,7 @@ SceneDesc loadSceneDesc(const std::string& path, const std::map<std::string, std
 
 void resolveSettings(RenderSettings& s, bool hasSize, bool hasMaxDepth, bool hasRrDepth, bool hasSpp,
                      const SceneDesc& desc) {
-  // (The direct pass of separateDirect is sized by the plan, not by the scene's sampler: settings_options.cpp.)
-  if (!hasSpp && desc.sampleCount && !s.separateDirect) s.spp = *desc.sampleCount;
+  if (desc.sampleCount && takesSceneSampleCount(s, hasSpp)) s.spp = *desc.sampleCount;
   if (!hasSize) {
     s.width = desc.camera.width;
     s.height = desc.camera.height;

@@ -59,4 +59,12 @@ struct RenderSettings {
   double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
 };
 
+// Whether spp comes from the scene's sampler sample_count (when it has one): only when the user gave no
+// spp, renders by samples (a time budget sizes the job itself) and has no separateDirect (its direct pass
+// is sized by the plan, directSppFor; sample_count is meant for pt and bdpt). The one rule for the
+// in-process renderer and the coordinator.
+inline bool takesSceneSampleCount(const RenderSettings& s, bool sppGiven) {
+  return !sppGiven && s.timeBudgetSeconds <= 0 && !s.separateDirect;
+}
+
 }  // namespace mlt

@@ -212,8 +212,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   settings.integrator.maxDepth = options.maxDepth.value_or(desc.maxDepth.value_or(settings.integrator.maxDepth));
   settings.integrator.rrDepth = options.rrDepth.value_or(desc.rrDepth.value_or(settings.integrator.rrDepth));
   const bool timed = settings.timeBudgetSeconds > 0;
-  // Without --spp: the scene's sampler sample_count, if it has one (and no time budget was given).
-  if (!options.sppGiven && !timed && desc.sampleCount && !settings.separateDirect) settings.spp = *desc.sampleCount;
+  if (desc.sampleCount && takesSceneSampleCount(settings, options.sppGiven)) settings.spp = *desc.sampleCount;
   if (timed && !options.sppGiven && !isMarkovChainMethod(settings.method)) {
     settings.spp = kTimeOnlySppCap;
     if (settings.samplesPerUnit == 0) settings.samplesPerUnit = 1;
