@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <exception>
 #include <filesystem>
 #include <fmt/format.h>
 #include <random>
@@ -75,7 +76,6 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted).count();
     result.status = st;
     stop();
-    if (o.afterFetch) o.afterFetch();
   } catch (const RpcError& e) {
     shutdown();
     throw std::runtime_error(e.message());  // the coordinator's message (e.g. the scene loader's)
@@ -83,8 +83,19 @@ EmbeddedFarmResult runEmbeddedFarm(const EmbeddedFarmOptions& o) {
     shutdown();
     throw;
   }
+  // The caller's step after the fetch (the PNG) runs while the farm exits; its failure (a file the caller
+  // writes, the EXR already saved) is the caller's error: the farm's temporary state goes all the same.
+  std::exception_ptr afterFetchError;
+  if (o.afterFetch) {
+    try {
+      o.afterFetch();
+    } catch (...) {
+      afterFetchError = std::current_exception();
+    }
+  }
   shutdown();
   if (tempState && !o.keepLogs) fs::remove_all(result.stateDir);
+  if (afterFetchError) std::rethrow_exception(afterFetchError);
   return result;
 }
 

@@ -34,8 +34,9 @@ struct RunResult {
   std::string output;  // stdout + stderr
 };
 
-RunResult run(const std::string& args) {
-  const std::string cmd = mltfarmExe().string() + " " + args + " 2>&1";
+// env: assignments put before the command ("NAME=value "), e.g. a TMPDIR.
+RunResult run(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + mltfarmExe().string() + " " + args + " 2>&1";
   RunResult r;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return r;
@@ -181,6 +182,25 @@ TEST_F(Cli, FarmDirKeepsTheLocalFarmsLogsAndRefusesAUsedDirectory) {
   const RunResult inProcess = run(job + "--in-process --farm-dir " + (tempDir() / "unused").string() + " -o " + out.string());
   EXPECT_NE(inProcess.exitCode, 0);
   EXPECT_NE(inProcess.output.find("--farm-dir is for the local farm"), std::string::npos) << inProcess.output;
+}
+
+// A PNG that cannot be written after a local-farm render (here: --png names a directory) is an error
+// naming it; the EXR is kept, and the farm's temporary state directory is removed as on success.
+TEST_F(Cli, UnwritablePngAfterALocalFarmRenderKeepsTheExrAndRemovesTheFarmState) {
+  const fs::path tmp = tempDir() / "png-fail-tmp";
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  const fs::path pngDir = tempDir() / "png-is-a-dir";
+  fs::create_directories(pngDir);
+  const fs::path out = tempDir() / "png_fail.exr";
+  fs::remove(out);
+  const RunResult r = run("render " + kScenes + "cornell-box.xml --method pt --spp 1 --width 16 --height 16 "
+                          "--threads 1 -q --png " + pngDir.string() + " -o " + out.string(),
+                          "TMPDIR=" + tmp.string() + " ");
+  EXPECT_NE(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find(pngDir.string()), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::is_regular_file(out)) << "the fetched EXR is lost";
+  EXPECT_TRUE(fs::is_empty(tmp)) << "the local farm's temporary state was left in " << tmp;
 }
 
 bool sameBits(const ExrImage& a, const ExrImage& b) {
