@@ -21,7 +21,8 @@ struct EmbeddedFarmOptions {
   bool keepLogs = false;         // keep the temporary directory (logs) even on success
   std::function<void(const JobStatus&)> onStatus;  // progress (WatchJob stream)
   // Runs once the image is fetched, while the coordinator and the workers, already told to stop, exit
-  // (e.g. the caller's PNG from OUT.exr): their shutdown overlaps it instead of preceding it.
+  // (e.g. the caller's PNG from OUT.exr): their shutdown overlaps it instead of preceding it. What it
+  // throws reaches the caller after the farm has exited and its temporary state is removed.
   std::function<void()> afterFetch;
 };
 
