@@ -140,7 +140,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   runPipeline(
       size_t(2 * threads),
       [&](size_t i) { return i < size_t(threads) || Clock::now() < trialEnd; },
-      [&](size_t i) { return runWorkUnit(scene, trialPlan, trialUnits[i % trialUnits.size()]); },
+      [&](size_t i) { return runWorkUnit(scene, trialPlan, trialUnits[spreadIndex(i, trialUnits.size())]); },
       [&](size_t, const PartialResult& r) { trialMutations += r.samples; });
   report.trialSeconds = std::chrono::duration<double>(Clock::now() - trialStart).count();
   report.trialMutations = trialMutations;
@@ -187,6 +187,15 @@ void writeTechniqueImages(const std::string& outExr, const TechniqueFilms& techn
 }
 
 }  // namespace
+
+size_t spreadIndex(size_t i, size_t n) {
+  uint64_t v = uint64_t(i), r = 0;
+  for (int b = 0; b < 64; ++b, v >>= 1) r = (r << 1) | (v & 1);  // bit reversal: r / 2^64 in [0, 1)
+  // The first unit at or after r / 2^64 of the plan, ceil(r n / 2^64), in exact integer arithmetic.
+  const unsigned __int128 x = static_cast<unsigned __int128>(r) * n;
+  const uint64_t u = uint64_t(x >> 64) + (uint64_t(x) != 0 ? 1 : 0);
+  return size_t(std::min<uint64_t>(u, n - 1));
+}
 
 std::string pngPathFor(const std::string& exrPath) {
   std::filesystem::path p(exrPath);

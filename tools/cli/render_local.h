@@ -31,6 +31,14 @@ struct LocalRenderOptions {
   bool techniqueImages = false;
 };
 
+// The unit the i-th run of a time budget's throughput trial takes among n planned chains: the base-2
+// radical inverse of i scaled to n, so that every prefix of the trial visits chains spread evenly over
+// the plan (each of the first 2^j runs in its own 1/2^j of the plan). Chains are planned in order of path
+// length (mmlt, rjmlt) and longer paths cost more per mutation, so a trial that took the first chains in
+// order measured the cheap ones only: a 4 s budget ran 5.5-5.9 s (mmlt and rjmlt on caustic-mirror and
+// door-ajar, one thread; 3.9-4.3 s in this order).
+size_t spreadIndex(size_t i, size_t n);
+
 // A Markov chain render with a time budget: the throughput trial and the mutations per pixel it chose.
 struct ChainBudgetReport {
   double trialSeconds = 0;
