@@ -59,6 +59,27 @@ TEST(EvalMetrics, ScaledImageHasExactRelativeBrightnessError) {
   EXPECT_EQ(same.meanErr, 0);
 }
 
+// topShare: the share of relMSE in the kTopPixels worst pixels. Noise spread over a 64x64 image leaves a
+// few percent there; the same image with one chain's share dumped on 3 adjacent pixels (what a Markov
+// chain confined to them does) holds most of its error there.
+TEST(EvalMetrics, TopShareSeesErrorConcentratedInAFewPixels) {
+  std::vector<Color> ref(64 * 64, Color(0.5f, 0.5f, 0.5f)), noisy = ref;
+  Pcg32 rng(3, 1);
+  for (Color& c : noisy) c = c * (0.9f + 0.2f * rng.uniform());
+  const ImageMetrics spread = computeMetrics(noisy, ref);
+  EXPECT_GT(spread.topShare, 0.0);
+  EXPECT_LT(spread.topShare, 0.01);  // 4 of 4096 pixels, each at most ~3x the mean error
+  std::vector<Color> confined = noisy;
+  for (int i = 0; i < 3; ++i) confined[2000 + i] = Color(20, 20, 20);
+  const ImageMetrics m = computeMetrics(confined, ref);
+  double expectedTop = 0;
+  for (int i = 0; i < 3; ++i) expectedTop += 3 * (19.5 * 19.5) / (0.25 + 1e-2);
+  // the fourth worst pixel is a noisy one: its share is below 1e-3 of the total
+  EXPECT_NEAR(m.topShare, expectedTop / (m.relMSE * 3 * 4096), 1e-3);
+  EXPECT_GT(m.topShare, 0.9);
+  EXPECT_EQ(computeMetrics(ref, ref).topShare, 0.0);  // an exact image has no error to hold
+}
+
 TEST(EvalMetrics, NonFiniteValuesAreCountedAndExcluded) {
   std::vector<Color> ref{{1, 1, 1}, {1, 1, 1}}, img{{1, 1, 1}, {NAN, 1, INFINITY}};
   ImageMetrics m = computeMetrics(img, ref);
@@ -182,8 +203,11 @@ TEST(EvalStability, DimRunIsFlaggedForMissingTransport) {
   bool found = false;
   for (const auto& f : runs[3].flags) found |= f.rfind("brightness", 0) == 0;
   EXPECT_TRUE(found);
-  for (size_t i = 0; i < runs.size(); ++i)
-    if (i != 3) EXPECT_TRUE(runs[i].flags.empty()) << i << ": " << runs[i].flags[0];
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (i != 3) {
+      EXPECT_TRUE(runs[i].flags.empty()) << i << ": " << runs[i].flags[0];
+    }
+  }
 }
 
 TEST(EvalStability, StuckPathLengthIsFlagged) {
@@ -201,6 +225,34 @@ TEST(EvalStability, StuckPathLengthIsFlagged) {
   EXPECT_TRUE(runs[0].flags.empty());
 }
 
+// A run whose error sits in a few pixels is flagged even when its relMSE is in line with the others (all
+// runs of a method can be confined so); the others are not.
+TEST(EvalStability, ConcentratedErrorRunIsFlagged) {
+  auto runs = syntheticRuns("veach-mlt", 5, 0.0, 0.01, 8);
+  for (RunRecord& r : runs) {
+    r.metrics.topShare = 0.02;
+    r.metrics.pixels = 256 * 256;
+  }
+  runs[1].metrics.topShare = 0.85;
+  StabilityReport rep = analyzeStability(runs, {});
+  ASSERT_EQ(runs[1].flags.size(), 1u);
+  EXPECT_EQ(runs[1].flags[0].rfind("concentrated:85% of the error in 4 pixels", 0), 0u) << runs[1].flags[0];
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (i != 1) {
+      EXPECT_TRUE(runs[i].flags.empty()) << i << ": " << runs[i].flags[0];
+    }
+  }
+  ASSERT_EQ(rep.verdicts.size(), 1u);
+  EXPECT_EQ(rep.verdicts[0].concentratedRuns, 1);
+  EXPECT_DOUBLE_EQ(rep.verdicts[0].worstTopShare, 0.85);
+  EXPECT_FALSE(rep.verdicts[0].ok());
+  runs[1].metrics.topShare = 0.29;  // below the threshold (0.3)
+  EXPECT_TRUE(analyzeStability(runs, {}).verdicts[0].ok());
+  runs[1].metrics.topShare = 0.85;
+  runs[1].metrics.pixels = 32 * 32;  // 4 pixels are 0.4% of this image: not a sign of confinement
+  EXPECT_TRUE(analyzeStability(runs, {}).verdicts[0].ok());
+}
+
 // ---- Tables and maps -----------------------------------------------------------------------------------
 
 TEST(EvalCsv, RunsRoundTrip) {
@@ -209,6 +261,8 @@ TEST(EvalCsv, RunsRoundTrip) {
   runs[1].markovChain = true;
   runs[1].acceptance = 0.25;
   runs[1].planSeconds = 0.125;
+  runs[1].metrics.topShare = 0.625;
+  runs[1].metrics.pixels = 65536;
   std::stringstream ss;
   writeRunsCsv(ss, runs);
   auto back = readRunsCsv(ss);
@@ -217,11 +271,26 @@ TEST(EvalCsv, RunsRoundTrip) {
   EXPECT_EQ(back[0].flags, runs[0].flags);
   EXPECT_DOUBLE_EQ(back[1].acceptance, 0.25);
   EXPECT_DOUBLE_EQ(back[1].planSeconds, 0.125);
+  EXPECT_DOUBLE_EQ(back[1].metrics.topShare, 0.625);
+  EXPECT_EQ(back[1].metrics.pixels, 65536u);
   EXPECT_LT(back[0].planSeconds, 0);  // not measured round-trips as not measured
   EXPECT_FALSE(back[0].markovChain);
   EXPECT_NEAR(back[2].metrics.relMSE, runs[2].metrics.relMSE, 1e-8 * runs[2].metrics.relMSE);
   std::stringstream bad("scene,method\n");
   EXPECT_THROW(readRunsCsv(bad), std::runtime_error);
+  // A runs.csv written before top_share is still read (top_share 0).
+  std::string text = ss.str(), old;
+  std::stringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {  // drop the last two columns
+    line = line.substr(0, line.rfind(','));
+    old += line.substr(0, line.rfind(',')) + "\n";
+  }
+  std::stringstream before(old);
+  auto oldBack = readRunsCsv(before);
+  ASSERT_EQ(oldBack.size(), runs.size());
+  EXPECT_EQ(oldBack[1].metrics.topShare, 0.0);
+  EXPECT_EQ(oldBack[1].metrics.pixels, 0u);
+  EXPECT_DOUBLE_EQ(oldBack[1].planSeconds, 0.125);
 }
 
 TEST(EvalErrorMap, RampIsMonotoneInBrightness) {
@@ -363,8 +432,11 @@ TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
   }
   EXPECT_EQ(kindRows["large"], 2 * 5);  // 2 budgets x 5 runs
   EXPECT_EQ(kindRows["small"], 2 * 5);
-  for (const RunRecord& r : result.runs)
-    if (r.method == "pssmlt") EXPECT_EQ(proposedPerRun[r.budgetIndex * 100 + r.run], r.samples) << r.run;
+  for (const RunRecord& r : result.runs) {
+    if (r.method == "pssmlt") {
+      EXPECT_EQ(proposedPerRun[r.budgetIndex * 100 + r.run], r.samples) << r.run;
+    }
+  }
   std::ifstream summaryFile(out + "/summary.md");
   std::stringstream summary;
   summary << summaryFile.rdbuf();

@@ -1,6 +1,8 @@
 #include "tools/eval/metrics.h"
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -27,6 +29,7 @@ ImageMetrics computeMetrics(const std::vector<Color>& image, const std::vector<C
   ImageMetrics m;
   double sumRel = 0, sumSq = 0, sumAbs = 0, sumX = 0, sumR = 0;
   uint64_t n = 0;
+  std::vector<double> pixelRel(image.size(), 0.0);  // per pixel, summed over its finite channels
   for (size_t i = 0; i < image.size(); ++i) {
     for (int c = 0; c < 3; ++c) {
       double r = reference[i][c];
@@ -38,6 +41,7 @@ ImageMetrics computeMetrics(const std::vector<Color>& image, const std::vector<C
       }
       double d = x - r;
       sumRel += d * d / (r * r + eps);
+      pixelRel[i] += d * d / (r * r + eps);
       sumSq += d * d;
       sumAbs += std::fabs(d);
       sumX += x;
@@ -51,6 +55,12 @@ ImageMetrics computeMetrics(const std::vector<Color>& image, const std::vector<C
     return m;
   }
   m.relMSE = sumRel / double(n);
+  const size_t top = std::min(pixelRel.size(), size_t(kTopPixels));
+  std::partial_sort(pixelRel.begin(), pixelRel.begin() + std::ptrdiff_t(top), pixelRel.end(), std::greater<>());
+  double sumTop = 0;
+  for (size_t i = 0; i < top; ++i) sumTop += pixelRel[i];
+  m.topShare = sumRel > 0 ? sumTop / sumRel : 0.0;
+  m.pixels = image.size();
   m.mse = sumSq / double(n);
   m.mae = sumAbs / double(n);
   m.mean = sumX / double(n);

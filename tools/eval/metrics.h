@@ -5,6 +5,8 @@
 //   MSE     = mean (x - r)^2
 //   MAE     = mean |x - r|
 //   meanErr = (mean x - mean r) / mean r          signed relative error of the mean brightness
+//   topShare = share of the relMSE sum held by the kTopPixels worst pixels (0 for an exact image): a run
+//              whose error sits in a few pixels (a Markov chain confined to them, one firefly) reads near 1
 // Non-finite rendered values are excluded from every average and counted (ImageMetrics::nonFinite).
 //
 // Reference noise. A reference is the average of K independent parts (different seeds). With s^2 the
@@ -22,8 +24,12 @@
 
 namespace mlt::eval {
 
+constexpr int kTopPixels = 4;
+
 struct ImageMetrics {
   double relMSE = 0, mse = 0, mae = 0;
+  double topShare = 0;    // of relMSE, in the kTopPixels worst pixels
+  uint64_t pixels = 0;    // of the image
   double meanErr = 0;     // relative, signed
   double mean = 0;        // mean of the rendered image (over pixels and channels)
   double refMean = 0;

@@ -61,7 +61,8 @@ def pool(dirs, out):
         r, f = read_csv(os.path.join(d, "runs.csv"))
         if not r:
             sys.exit("results_page.py: %s has no runs" % os.path.join(d, "runs.csv"))
-        fields["runs"] = f
+        # The union of the columns, in order: eval outputs written before a column was added lack it.
+        fields["runs"] = fields.get("runs", []) + [c for c in f if c not in fields.get("runs", [])]
         runs += r
         a, f = read_csv(os.path.join(d, "acceptance.csv"))
         if f:

@@ -46,6 +46,10 @@ std::vector<std::string> csvSplit(const std::string& line) {
 
 static const char* kRunsHeader =
     "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
+    "acceptance,chains,stuck_chains,non_finite,flags,plan_seconds,top_share,pixels";
+// The header before top_share and pixels (runs.csv files written before them are still read; both read as 0).
+static const char* kRunsHeader20 =
+    "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
     "acceptance,chains,stuck_chains,non_finite,flags,plan_seconds";
 
 static std::string joinFlags(const std::vector<std::string>& flags) {
@@ -58,12 +62,12 @@ void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
   os << kRunsHeader << "\n";
   for (const RunRecord& r : runs) {
     const ImageMetrics& m = r.metrics;
-    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{}\n",
+    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{},{:.6g},{}\n",
                       csvQuote(r.scene), csvQuote(r.method), r.mode, r.budgetIndex, r.budget, r.run, r.seed,
                       r.seconds, r.work, r.samples, m.relMSE, m.mse, m.mae, m.meanErr,
                       r.markovChain && r.acceptance >= 0 ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
                       r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)),
-                      r.planSeconds >= 0 ? fmt::format("{:.6f}", r.planSeconds) : std::string());
+                      r.planSeconds >= 0 ? fmt::format("{:.6f}", r.planSeconds) : std::string(), m.topShare, m.pixels);
   }
 }
 
@@ -102,16 +106,17 @@ void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs) {
 
 std::vector<RunRecord> readRunsCsv(std::istream& is) {
   std::string line;
-  if (!std::getline(is, line) || line != kRunsHeader)
+  if (!std::getline(is, line) || (line != kRunsHeader && line != kRunsHeader20))
     throw std::runtime_error("runs.csv line 1: unexpected header (expected '" + std::string(kRunsHeader) + "')");
+  const size_t fields = line == kRunsHeader ? 22 : 20;
   std::vector<RunRecord> runs;
   int lineNo = 1;
   while (std::getline(is, line)) {
     ++lineNo;
     if (line.empty()) continue;
     auto f = csvSplit(line);
-    if (f.size() != 20)
-      throw std::runtime_error(fmt::format("runs.csv line {}: expected 20 fields, got {}", lineNo, f.size()));
+    if (f.size() != fields)
+      throw std::runtime_error(fmt::format("runs.csv line {}: expected {} fields, got {}", lineNo, fields, f.size()));
     try {
       RunRecord r;
       r.scene = f[0];
@@ -137,6 +142,10 @@ std::vector<RunRecord> readRunsCsv(std::istream& is) {
       for (std::string flag; std::getline(flags, flag, ';');)
         if (!flag.empty()) r.flags.push_back(flag);
       r.planSeconds = f[19].empty() ? -1 : std::stod(f[19]);
+      if (fields > 20) {
+        r.metrics.topShare = std::stod(f[20]);
+        r.metrics.pixels = std::stoull(f[21]);
+      }
       runs.push_back(std::move(r));
     } catch (const std::logic_error& e) {
       throw std::runtime_error(fmt::format("runs.csv line {}: bad number ({})", lineNo, e.what()));

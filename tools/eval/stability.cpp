@@ -78,6 +78,12 @@ void flagStuck(RunRecord& r, const StabilityConfig& cfg) {
   if (!where.empty()) r.flags.push_back("stuck:" + where);
 }
 
+void flagConcentrated(RunRecord& r, const StabilityConfig& cfg) {
+  if (r.metrics.topShare >= cfg.concentratedShare && r.metrics.pixels >= cfg.concentratedMinPixels)
+    r.flags.push_back(fmt::format("concentrated:{:.0f}% of the error in {} pixels", 100 * r.metrics.topShare,
+                                  kTopPixels));
+}
+
 }  // namespace
 
 StabilityReport analyzeStability(std::vector<RunRecord>& runs, const std::map<std::string, ReferenceNoise>& refNoise,
@@ -93,7 +99,10 @@ StabilityReport analyzeStability(std::vector<RunRecord>& runs, const std::map<st
   for (auto& [key, g] : groups) {
     flagOutliers(g, cfg);
     flagBrightness(g, cfg);
-    for (RunRecord* r : g) flagStuck(*r, cfg);
+    for (RunRecord* r : g) {
+      flagStuck(*r, cfg);
+      flagConcentrated(*r, cfg);
+    }
   }
 
   StabilityReport report;
@@ -113,6 +122,10 @@ StabilityReport analyzeStability(std::vector<RunRecord>& runs, const std::map<st
         ++v.runs;
         if (r->metrics.nonFinite > 0) ++v.nonFiniteRuns;
         if (hasFlag(*r, "stuck")) ++v.stuckRuns;
+        if (hasFlag(*r, "concentrated")) {
+          ++v.concentratedRuns;
+          v.worstTopShare = std::max(v.worstTopShare, r->metrics.topShare);
+        }
         if (hasFlag(*r, "brightness")) ++v.brightnessRuns;
         if (hasFlag(*r, "outlier")) {
           ++v.outlierRuns;
@@ -155,6 +168,11 @@ StabilityReport analyzeStability(std::vector<RunRecord>& runs, const std::map<st
       v.problems.push_back(fmt::format("stuck chains: {} of {} runs have a path length or chain with "
                                        "acceptance < {:.2g}",
                                        v.stuckRuns, v.runs, cfg.stuckAcceptance));
+    if (v.concentratedRuns > 0)
+      v.problems.push_back(fmt::format("concentrated error: {} of {} runs hold at least {:.0f}% of their relMSE in "
+                                       "{} pixels (up to {:.0f}%: a chain confined to them, or a firefly)",
+                                       v.concentratedRuns, v.runs, 100 * cfg.concentratedShare, kTopPixels,
+                                       100 * v.worstTopShare));
     if (v.nonFiniteRuns > 0)
       v.problems.push_back(fmt::format("non-finite pixels in {} of {} runs", v.nonFiniteRuns, v.runs));
     report.verdicts.push_back(std::move(v));
