@@ -236,8 +236,11 @@ TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
   // The warning about b's uncertainty appears exactly when its recorded relative standard error is above 2%.
   EXPECT_EQ(r.output.find("relative standard error of b") != std::string::npos, n.at("bStdErr") > 0.02 * n.at("b"))
       << r.output;
-  // b rests on the candidates (2000 per length on average, at most 8000) and every large step (develop.h).
-  EXPECT_LE(n.at("bootstrapSamples"), 8000.0);
+  // b rests on the candidates and every large step (develop.h). The candidates cost what 2000 of the chains'
+  // mutations per length do (bootstrap.h, chainMixCost): at least a quarter of that many per length, and
+  // not more than the cheapest length's candidates could buy (4 lengths here; a candidate draws at least
+  // 4 numbers, a mutation of this mix about 10).
+  EXPECT_LE(n.at("bootstrapSamples"), 4 * 2000.0 * 4);
   EXPECT_GE(n.at("bootstrapSamples"), 4 * 500.0);
   EXPECT_EQ(n.at("bSamples"), n.at("bootstrapSamples") + n.at("largeSteps"));
   EXPECT_EQ(n.at("bootstrapPerLength"), 2000.0);

@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -114,8 +115,8 @@ TEST(Bootstrap, BinnedEqualsUnbinned) {
   };
   const BootstrapResult a = runBootstrap(bc, [&] { return CandidateFn(c); });
   const BootstrapResult b = runBinnedBootstrap(bc, [&]() -> BinnedCandidateFn {
-    return [&](uint64_t i, int k, uint32_t* bin) {
-      *bin = uint32_t(i % 7);
+    return [&](uint64_t i, int k, CandidateInfo* info) {
+      info->bin = uint32_t(i % 7);  // no work reported: every length costs the same, as unbinned
       return c(i, k);
     };
   });
@@ -236,6 +237,46 @@ TEST(Bootstrap, BudgetGoesToTheLengthWhoseBIsLeastCertain) {
   EXPECT_EQ(r.lengths[0].c.size(), 20000u);  // 5000 -> 10000 -> 20000; one more (+20000) would exceed 40000
   EXPECT_EQ(r.lengths[1].c.size(), 5000u);   // smooth: its start is enough
   EXPECT_EQ(r.candidates, 25000u);
+}
+
+// The budget counts cost, not candidates: two lengths as noisy as each other, one costing 9x the other
+// per candidate (numbers drawn). The budget is totalCandidates of the chains' mix (b-weighted mean cost of
+// the first round) and the cost spent stays within it; the cheap length gets more of the doublings than it
+// does when both cost the same.
+TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 1024;
+  bc.pathLengths = {1, 2};
+  bc.totalCandidates = 16384;
+  const auto value = [](uint64_t i) { return IndependentSource(5, i).valueAt(0, 0) < 0.02 ? 50.0 : 0.0; };
+  const auto run = [&](uint32_t expensiveWork) {
+    return runBinnedBootstrap(bc, [&]() -> BinnedCandidateFn {
+      return [&, expensiveWork](uint64_t i, int k, CandidateInfo* info) {
+        info->work = k == 2 ? expensiveWork : 0;
+        return value(i);
+      };
+    });
+  };
+  const BootstrapResult costed = run(8 * uint32_t(kCandidateOverhead));  // length 2: 9x the overhead alone
+  const double c1 = candidateCost(costed.lengths[0]), c2 = candidateCost(costed.lengths[1]);
+  EXPECT_DOUBLE_EQ(c1, kCandidateOverhead);
+  EXPECT_DOUBLE_EQ(c2, 9 * kCandidateOverhead);
+  const double bothB = costed.lengths[0].b + costed.lengths[1].b;
+  const double mix = (costed.lengths[0].b * c1 + costed.lengths[1].b * c2) / bothB;
+  EXPECT_NEAR(chainMixCost(costed.lengths), mix, 1e-12 * mix);
+  const double spent = double(costed.lengths[0].c.size()) * c1 + double(costed.lengths[1].c.size()) * c2;
+  EXPECT_LE(spent, double(bc.totalCandidates) * mix);
+  EXPECT_GT(spent, 0.5 * double(bc.totalCandidates) * mix);  // within one doubling of the budget
+
+  const BootstrapResult even = run(0);
+  EXPECT_LE(even.candidates, bc.totalCandidates);
+  EXPECT_GT(even.candidates, bc.totalCandidates / 2);
+  // The optimum of sum se_k^2 at fixed cost is n_k ~ sigma_k / sqrt(cost_k): the cheap length's share grows
+  // by about sqrt(9) = 3 (doublings quantize it to a power of two).
+  const double ratioCosted = double(costed.lengths[0].c.size()) / double(costed.lengths[1].c.size());
+  const double ratioEven = double(even.lengths[0].c.size()) / double(even.lengths[1].c.size());
+  std::printf("n_1 / n_2: %g with costs 1 and 9, %g with equal costs\n", ratioCosted, ratioEven);
+  EXPECT_GE(ratioCosted, 2 * ratioEven);
 }
 
 }  // namespace

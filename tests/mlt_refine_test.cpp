@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -160,7 +161,8 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
     const JobPlan big = planJob(cornell(), settingsFor(m, 5, 1024));
     EXPECT_EQ(small.norm.b, big.norm.b) << "one bootstrap for both";
     const ChainReport rs = makeChainReport(small, runJob(small));
-    const ChainReport rb = makeChainReport(big, runJob(big));
+    const PartialResult bigRun = runJob(big);
+    const ChainReport rb = makeChainReport(big, bigRun);
     EXPECT_LT(rs.bStdErr, rs.bBootstrapStdErr) << m.c_str() << ": the large steps add information";
     if (m == "pssmlt") {
       EXPECT_LT(rb.bStdErr, 0.9 * rs.bStdErr) << m.c_str() << ": " << rb.bStdErr << " vs " << rs.bStdErr;
@@ -179,8 +181,13 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
         }
       }
     }
-    if (m == "pssmlt") {  // one length: compare with the large steps' model variance alone
-      const double largeOnly = std::sqrt(big.norm.bootstrapB[0].sampleVar / double(rb.steps("large")));
+    if (m == "pssmlt") {  // one length: compare with the large steps' own stated error (combineB: the larger
+                          // of the bootstrap's model variance and their own spread)
+      const TargetSums& large = bigRun.stats.largeStepSums.at(0);
+      const double nL = double(large.n), bL = large.sum / nL;
+      const double spread = (large.sumSq - nL * bL * bL) / (nL - 1) / nL;
+      const double largeOnly = std::sqrt(std::max(big.norm.bootstrapB[0].sampleVar / nL, spread));
+      EXPECT_EQ(large.n, rb.steps("large"));
       EXPECT_LE(rb.bStdErr, std::min(rb.bBootstrapStdErr, largeOnly));
     }
     EXPECT_EQ(rb.bSamples, big.norm.bootstrapSamples + rb.steps("large"));
@@ -263,7 +270,12 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   auto16.bootstrapSamples = 0;
   const JobPlan plan = planJob(cornell(), auto16);
   EXPECT_EQ(plan.settings.bootstrapSamples, int(kMinBootstrapPerLength));
-  EXPECT_EQ(plan.norm.bootstrapSamples, kMinBootstrapPerLength);
+  // It holds the cost of that many of the chains' mutations (bootstrap.h, chainMixCost): a quarter of
+  // them to start with, doubled while the budget allows.
+  const uint64_t n0 = kMinBootstrapPerLength / 4, got = plan.norm.bootstrapSamples;
+  EXPECT_GE(got, n0);
+  EXPECT_EQ(got % n0, 0u);
+  EXPECT_EQ((got / n0) & (got / n0 - 1), 0u) << got << ": a quarter, doubled";
 }
 
 // A bootstrap candidate of veach-mlt is a whole bdpt sample, 3-10 of its mutations: the count-sized

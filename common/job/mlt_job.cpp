@@ -218,9 +218,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
-  if (lengths.size() > 1 && bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
-    // Several lengths: N per length on average. A quarter each to start with, then the budget goes where
-    // b's variance is (mmlt's length 1, a small light seen directly, needs far more than the others).
+  if (bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
+    // A budget of the cost of N mutations per length (bootstrap.h, chainMixCost: a candidate of a long
+    // path costs more than one of a short path, and the chains dwell on bright paths, often short). A
+    // quarter per length to start with, then the budget goes where b's variance is per unit of cost
+    // (mmlt's length 1, a small light seen directly, needs far more than the others); one length doubles
+    // while it fits.
     bc.totalCandidates = bc.candidatesPerLength * lengths.size();
     bc.candidatesPerLength /= 4;
   }
@@ -229,12 +232,13 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   const BinnedCandidateFnFactory candidates = [&spec, &scene, &s, seed, width, height]() -> BinnedCandidateFn {
     std::shared_ptr<PssTarget> target = spec.makeTarget(scene, s);
     auto path = std::make_shared<PathContribution>();
-    return [target, path, seed, width, height](uint64_t index, int k, uint32_t* bin) {
+    return [target, path, seed, width, height](uint64_t index, int k, CandidateInfo* info) {
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
       const double c = targetFunction(*path);
       // mmlt: one splat per path; its allocation bin (pssmlt's single length needs none).
-      if (c > 0 && !path->splats.empty()) *bin = allocationBin(path->splats[0].pRaster, width, height);
+      if (c > 0 && !path->splats.empty()) info->bin = allocationBin(path->splats[0].pRaster, width, height);
+      info->work = source.reads();
       return c;
     };
   };

@@ -32,12 +32,20 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   // Evaluates candidates [from, to) of length slot l in parallel (each writes its own slot).
   const auto evaluate = [&](LengthBootstrap& lb, uint64_t from, uint64_t to) {
     lb.c.resize(to);
-    if (binned) lb.bin.resize(to, kNoBin);
+    if (binned) {
+      lb.bin.resize(to, kNoBin);
+      lb.work.resize(to, 0);
+    }
     const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
       BinnedCandidateFn fn = makeCandidateFn();
-      uint32_t unused = kNoBin;
-      for (uint64_t i = r.begin(); i != r.end(); ++i)
-        lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength, binned ? &lb.bin[i] : &unused);
+      for (uint64_t i = r.begin(); i != r.end(); ++i) {
+        CandidateInfo info;
+        lb.c[i] = fn(lb.firstCandidate + i, lb.pathLength, &info);
+        if (binned) {
+          lb.bin[i] = info.bin;
+          lb.work[i] = info.work;
+        }
+      }
     };
     if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
     else body(tbb::blocked_range<uint64_t>(from, to));
@@ -82,20 +90,26 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     reduce(l);
   }
   if (config.totalCandidates > 0) {
-    // Budgeted sizing: double the length whose doubling removes most of b's variance per candidate
-    // (largest se_k^2 / n_k; lowest index on ties) while the total stays within the budget.
+    // Budgeted sizing, in cost (numbers drawn; all lengths alike for an unbinned bootstrap): the budget is
+    // totalCandidates candidates of the chains' mix, as the first round measures it. Double the length
+    // whose doubling removes most of b's variance per unit of cost (largest se_k^2 / (n_k cost_k); lowest
+    // index on ties) while the total cost stays within the budget. A length's cost is that of its first
+    // round, so that the decisions stay a pure function of the candidates' values and work.
+    std::vector<double> cost(result.lengths.size());
+    for (size_t l = 0; l < result.lengths.size(); ++l) cost[l] = candidateCost(result.lengths[l]);
+    const double budget = double(config.totalCandidates) * chainMixCost(result.lengths);
+    double spent = 0;
+    for (size_t l = 0; l < result.lengths.size(); ++l) spent += double(result.lengths[l].c.size()) * cost[l];
     for (;;) {
-      uint64_t total = 0;
       size_t best = 0;
-      for (size_t l = 0; l < result.lengths.size(); ++l) {
-        total += result.lengths[l].c.size();
-        if (varMean[l] / double(result.lengths[l].c.size()) > varMean[best] / double(result.lengths[best].c.size()))
-          best = l;
-      }
+      const auto gain = [&](size_t l) { return varMean[l] / (double(result.lengths[l].c.size()) * cost[l]); };
+      for (size_t l = 1; l < result.lengths.size(); ++l)
+        if (gain(l) > gain(best)) best = l;
       LengthBootstrap& lb = result.lengths[best];
       const uint64_t n = lb.c.size();
-      if (!(varMean[best] > 0) || total + n > config.totalCandidates) break;
+      if (!(varMean[best] > 0) || spent + double(n) * cost[best] > budget) break;
       evaluate(lb, n, 2 * n);
+      spent += double(n) * cost[best];
       reduce(best);
     }
   } else {
@@ -139,9 +153,37 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
 
 }  // namespace
 
+double candidateCost(const LengthBootstrap& lb) {
+  uint64_t work = 0;  // integers: exact
+  for (uint32_t w : lb.work) work += w;
+  return kCandidateOverhead + (lb.work.empty() ? 0.0 : double(work) / double(lb.work.size()));
+}
+
+double chainCost(const LengthBootstrap& lb) {
+  const double uniform = candidateCost(lb);
+  double c = 0, cWork = 0;  // in index order: deterministic
+  for (size_t i = 0; i < lb.work.size() && i < lb.c.size(); ++i) {
+    c += lb.c[i];
+    cWork += lb.c[i] * double(lb.work[i]);
+  }
+  const double weighted = c > 0 ? kCandidateOverhead + cWork / c : uniform;
+  return kCostLargeStepShare * uniform + (1 - kCostLargeStepShare) * weighted;
+}
+
+double chainMixCost(const std::vector<LengthBootstrap>& lengths) {
+  double b = 0, bCost = 0, mean = 0;
+  for (const LengthBootstrap& lb : lengths) {
+    const double cost = chainCost(lb);
+    b += lb.b;
+    bCost += lb.b * cost;
+    mean += cost / double(lengths.size());
+  }
+  return b > 0 ? bCost / b : (lengths.empty() ? kCandidateOverhead : mean);
+}
+
 BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn) {
   return bootstrapImpl(config, [&makeCandidateFn]() -> BinnedCandidateFn {
-    return [fn = makeCandidateFn()](uint64_t index, int pathLength, uint32_t*) { return fn(index, pathLength); };
+    return [fn = makeCandidateFn()](uint64_t index, int pathLength, CandidateInfo*) { return fn(index, pathLength); };
   }, false);
 }
 

@@ -33,9 +33,15 @@ using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
 // Makes a CandidateFn with its own scratch buffers (called once per parallel task).
 using CandidateFnFactory = std::function<CandidateFn()>;
 // The same, also reporting the film bin the candidate's light lands in (kNoBin: none), which the chain
-// allocation uses to weigh path lengths by where their light lands (mlt_job.cpp, allocationWeights).
+// allocation uses to weigh path lengths by where their light lands (mlt_job.cpp, allocationWeights), and
+// its work: the primary-sample numbers it drew (IndependentSource::reads), a deterministic measure of its
+// cost (a vertex draws a few numbers and traces a ray), which the budgeted sizing counts.
 constexpr uint32_t kNoBin = UINT32_MAX;
-using BinnedCandidateFn = std::function<double(uint64_t index, int pathLength, uint32_t* bin)>;
+struct CandidateInfo {
+  uint32_t bin = kNoBin;
+  uint32_t work = 0;
+};
+using BinnedCandidateFn = std::function<double(uint64_t index, int pathLength, CandidateInfo* info)>;
 using BinnedCandidateFnFactory = std::function<BinnedCandidateFn()>;
 
 
@@ -43,8 +49,10 @@ struct BootstrapConfig {
   uint64_t candidatesPerLength = 100000;  // initial count per path length
   double targetRelStdErr = 0;             // 0: a fixed size
   uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength per length
-  // > 0: a budget instead of a target. After the first round, the length whose doubling removes most of
-  // b's variance per candidate (largest se_k^2 / n_k) doubles, while the total stays within the budget.
+  // > 0: a budget instead of a target: the cost of totalCandidates of the chains' mutations (chainMixCost).
+  // After the first round, the length whose doubling removes most of b's variance per unit of cost
+  // (largest se_k^2 / (n_k cost_k), cost_k = candidateCost) doubles, while the total cost stays within the
+  // budget. Also with one length: it doubles while it fits.
   uint64_t totalCandidates = 0;
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
   uint64_t firstSlot = 0;                // slot of pathLengths[0] (a later block of lengths continues the slots)
@@ -56,6 +64,7 @@ struct LengthBootstrap {
   uint64_t firstCandidate = 0;
   std::vector<double> c;  // target value of each candidate
   std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
+  std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
   double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
   double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
   AliasTable table;       // over c; empty if b == 0
@@ -68,8 +77,27 @@ struct BootstrapResult {
   double seconds = 0;
 };
 
+// The cost of one candidate of a length, in numbers drawn: kCandidateOverhead (the per-candidate work
+// that draws nothing) + the length's mean numbers drawn. Fitted with tests/bench/bootstrap_cost_bench
+// (mmlt, depth 12, 256x256): a candidate of length 12 takes 13x the time of one of length 1 on
+// caustic-mirror and draws 9x the numbers; 3.9x and 5.2x on the Cornell box (Russian roulette ends most
+// long paths early); a fit of time against numbers drawn leaves no overhead to speak of (docs/CHAINS.md).
+constexpr double kCandidateOverhead = 1;
+double candidateCost(const LengthBootstrap& lb);
+// The cost of what the chains of a length do: a chain's states are distributed as c, so its small steps
+// cost the c-weighted mean of the candidates' cost (bright paths can be short: the light seen directly),
+// its large steps a candidate's; kCostLargeStepShare of each (the default large-step probability: the
+// bootstrap does not depend on the chains' settings, so a plan may use another).
+constexpr double kCostLargeStepShare = 0.3;
+double chainCost(const LengthBootstrap& lb);
+// The mean cost of a mutation of the chains' mix of lengths: chainCost of each length in proportion to
+// b_k (the chains' mutations go to the lengths about in proportion to b_k; mlt_job.h, allocationWeights).
+// The budget of a budgeted bootstrap is totalCandidates x this, measured on its first round.
+double chainMixCost(const std::vector<LengthBootstrap>& lengths);
+
 BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn);
-// The same, keeping every candidate's film bin in LengthBootstrap::bin (identical c, b and sizing).
+// The same, keeping every candidate's film bin in LengthBootstrap::bin and the lengths' work (identical c
+// and b; the budgeted sizing counts the work, so its doublings may differ).
 BootstrapResult runBinnedBootstrap(const BootstrapConfig& config, const BinnedCandidateFnFactory& makeCandidateFn);
 
 // Largest-remainder (Hamilton) apportionment of `total` among weights (ties to the lower index):

@@ -92,7 +92,12 @@ class IndependentSource final : public SampleSource {
   void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; }
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
-  float next1D() override { return valueAt(stream_, next_++); }
+  float next1D() override {
+    ++reads_;
+    return valueAt(stream_, next_++);
+  }
+  // Numbers drawn by next1D so far: a deterministic measure of the work of the path that drew them.
+  uint32_t reads() const { return reads_; }
   float valueAt(int stream, int coordinate) const {
     if (candidate_)
       if (const int axis = candidateAxis(stream, coordinate); axis >= 0) return candidateCoordinate(seed_, index_, axis);
@@ -103,6 +108,7 @@ class IndependentSource final : public SampleSource {
   uint64_t seed_, index_;
   bool candidate_ = false;
   int stream_ = 0, next_ = 0;
+  uint32_t reads_ = 0;
 };
 
 inline float candidateCoordinate(uint64_t seed, uint64_t candidate, int axis) {
