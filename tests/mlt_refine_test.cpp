@@ -278,6 +278,35 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   EXPECT_EQ((got / n0) & (got / n0 - 1), 0u) << got << ": a quarter, doubled";
 }
 
+// The bootstrap's budget counts cost (bootstrap.h): on a real scene every candidate reports the numbers it
+// drew, a longer path draws more of them, and the cost spent stays within the cost of N of the chains'
+// mutations per length (the budget of its first round's mix).
+TEST(BootstrapSize, CandidatesReportTheirWorkAndTheBudgetHoldsInCost) {
+  RenderSettings s = settingsFor("mmlt", 3, 16);
+  s.integrator.maxDepth = 8;
+  s.bootstrapSamples = 2048;
+  s.width = 16;
+  s.height = 12;
+  const ChainJobSpec* spec = findChainJobSpec("mmlt");
+  ASSERT_TRUE(spec);
+  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(*spec, cornell(), s);
+  const std::vector<LengthBootstrap>& L = boot.result.lengths;
+  ASSERT_EQ(L.size(), 8u);
+  double spent = 0;
+  for (const LengthBootstrap& lb : L) {
+    ASSERT_EQ(lb.work.size(), lb.c.size()) << "k = " << lb.pathLength;
+    spent += double(lb.c.size()) * candidateCost(lb);
+  }
+  // Length 1 (the light seen directly) draws the fewest numbers, the longest length the most.
+  EXPECT_LT(candidateCost(L.front()), candidateCost(L.back()));
+  for (const LengthBootstrap& lb : L) EXPECT_GE(candidateCost(lb), candidateCost(L.front())) << lb.pathLength;
+  // Within the budget, measured as the doublings measure it: with the first round's (a quarter per length)
+  // cost per candidate, which the full counts only refine. Allow for that refinement: 10%.
+  const double budget = 2048.0 * double(L.size()) * chainMixCost(L);
+  EXPECT_LE(spent, 1.1 * budget);
+  EXPECT_GE(boot.result.candidates, L.size() * 2048 / 4);
+}
+
 // A bootstrap candidate of veach-mlt is a whole bdpt sample, 3-10 of its mutations: the count-sized
 // bootstrap holds 1 / candidateCost of the candidates pssmlt-bdpt's holds at the same settings (the same share of
 // the job's time; the results page measured veach-mlt's bootstrap at 13-25% of the job before this).
