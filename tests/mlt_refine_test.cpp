@@ -292,11 +292,8 @@ TEST(BootstrapSize, CandidatesReportTheirWorkAndTheBudgetHoldsInCost) {
   const MarkovChainBootstrap boot = bootstrapMarkovChainJob(*spec, cornell(), s);
   const std::vector<LengthBootstrap>& L = boot.result.lengths;
   ASSERT_EQ(L.size(), 8u);
-  double spent = 0;
-  for (const LengthBootstrap& lb : L) {
-    ASSERT_EQ(lb.work.size(), lb.c.size()) << "k = " << lb.pathLength;
-    spent += double(lb.c.size()) * candidateCost(lb);
-  }
+  for (const LengthBootstrap& lb : L) ASSERT_EQ(lb.work.size(), lb.c.size()) << "k = " << lb.pathLength;
+  const double spent = bootstrapCost(L);
   // Length 1 (the light seen directly) draws the fewest numbers, the longest length the most.
   EXPECT_LT(candidateCost(L.front()), candidateCost(L.back()));
   for (const LengthBootstrap& lb : L) EXPECT_GE(candidateCost(lb), candidateCost(L.front())) << lb.pathLength;

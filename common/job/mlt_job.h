@@ -76,11 +76,11 @@ struct MarkovChainBootstrap {
 // ~30 large steps for b on a scene with a visible light: so it gets kBootstrapShare of the mutations (a
 // candidate costs about what a mutation costs; ChainJobSpec::candidateCost otherwise), spread evenly over the path lengths and rounded down to
 // a multiple of 64, at least kMinBootstrapPerLength per length (a length whose candidates all miss gets no
-// chains) and at most kMaxBootstrapPerLength. With several lengths (mmlt, rjmlt) that is the average, in
-// candidates of the chains' mix of lengths (a candidate of length 12 can cost 12x one of length 1, counted
-// by the numbers it draws: bootstrap.h, chainMixCost): each starts with a quarter and the rest of the cost
-// goes, by doublings, to the lengths whose b_k is least certain per unit of cost (bootstrap.h,
-// totalCandidates). Measured cost: 2-4% of the job (README).
+// chains) and at most kMaxBootstrapPerLength. That count is a budget in cost: the cost of that many of the
+// chains' mutations per length (a candidate of length 12 can cost 12x one of length 1, counted by the
+// numbers it draws: bootstrap.h, chainMixCost). Each length starts with a quarter of it and the rest of the
+// cost goes, by doublings, to the lengths whose b_k is least certain per unit of cost (bootstrap.h,
+// totalCandidates); a single length doubles while it fits. Measured cost: 2-5% of the job (CHAINS.md).
 constexpr double kBootstrapShare = 0.04;
 constexpr uint64_t kMinBootstrapPerLength = 4096;
 constexpr uint64_t kMaxBootstrapPerLength = uint64_t(1) << 20;

@@ -98,8 +98,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     std::vector<double> cost(result.lengths.size());
     for (size_t l = 0; l < result.lengths.size(); ++l) cost[l] = candidateCost(result.lengths[l]);
     const double budget = double(config.totalCandidates) * chainMixCost(result.lengths);
-    double spent = 0;
-    for (size_t l = 0; l < result.lengths.size(); ++l) spent += double(result.lengths[l].c.size()) * cost[l];
+    double spent = bootstrapCost(result.lengths);
     for (;;) {
       size_t best = 0;
       const auto gain = [&](size_t l) { return varMean[l] / (double(result.lengths[l].c.size()) * cost[l]); };
@@ -157,6 +156,12 @@ double candidateCost(const LengthBootstrap& lb) {
   uint64_t work = 0;  // integers: exact
   for (uint32_t w : lb.work) work += w;
   return kCandidateOverhead + (lb.work.empty() ? 0.0 : double(work) / double(lb.work.size()));
+}
+
+double bootstrapCost(const std::vector<LengthBootstrap>& lengths) {
+  double cost = 0;
+  for (const LengthBootstrap& lb : lengths) cost += double(lb.c.size()) * candidateCost(lb);
+  return cost;
 }
 
 double chainCost(const LengthBootstrap& lb) {

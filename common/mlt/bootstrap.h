@@ -84,6 +84,8 @@ struct BootstrapResult {
 // long paths early); a fit of time against numbers drawn leaves no overhead to speak of (docs/CHAINS.md).
 constexpr double kCandidateOverhead = 1;
 double candidateCost(const LengthBootstrap& lb);
+// What a bootstrap's candidates cost in all: sum over lengths of n_k candidateCost_k.
+double bootstrapCost(const std::vector<LengthBootstrap>& lengths);
 // The cost of what the chains of a length do: a chain's states are distributed as c, so its small steps
 // cost the c-weighted mean of the candidates' cost (bright paths can be short: the light seen directly),
 // its large steps a candidate's; kCostLargeStepShare of each (the default large-step probability: the

@@ -97,9 +97,8 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     const double probeSeconds = boot.result.seconds;
     // Its throughput in the unit of --bootstrap, the cost of one of the chains' mutations (bootstrap.h,
     // chainMixCost): the probe's cost (numbers drawn) per second over that cost.
-    double probeCost = 0;
-    for (const LengthBootstrap& lb : boot.result.lengths) probeCost += double(lb.c.size()) * candidateCost(lb);
-    const double perSecond = probeCost / std::max(probeSeconds, 1e-6) / chainMixCost(boot.result.lengths);
+    const double perSecond =
+        bootstrapCost(boot.result.lengths) / std::max(probeSeconds, 1e-6) / chainMixCost(boot.result.lengths);
     const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds);
     s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {

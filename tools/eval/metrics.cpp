@@ -40,8 +40,9 @@ ImageMetrics computeMetrics(const std::vector<Color>& image, const std::vector<C
         continue;
       }
       double d = x - r;
-      sumRel += d * d / (r * r + eps);
-      pixelRel[i] += d * d / (r * r + eps);
+      const double rel = d * d / (r * r + eps);
+      sumRel += rel;
+      pixelRel[i] += rel;
       sumSq += d * d;
       sumAbs += std::fabs(d);
       sumX += x;
