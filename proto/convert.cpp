@@ -211,16 +211,23 @@ v1::TargetSums toProto(const TargetSums& t) {
   p.set_n(t.n);
   p.set_sum(t.sum);
   p.set_sum_sq(t.sumSq);
+  p.set_bulk(t.bulk);
+  p.set_bulk_sq(t.bulkSq);
+  p.set_excess_sq(t.excessSq);
   return p;
 }
 
 TargetSums fromProto(const v1::TargetSums& p, const char* field) {
-  if (!(std::isfinite(p.sum()) && p.sum() >= 0 && std::isfinite(p.sum_sq()) && p.sum_sq() >= 0))
-    throw WireError(field, fmt::format("sums must be finite and >= 0, got {} and {}", p.sum(), p.sum_sq()));
+  for (double v : {p.sum(), p.sum_sq(), p.bulk(), p.bulk_sq(), p.excess_sq()})
+    if (!(std::isfinite(v) && v >= 0))
+      throw WireError(field, fmt::format("sums must be finite and >= 0, got {}", v));
   TargetSums t;
   t.n = p.n();
   t.sum = p.sum();
   t.sumSq = p.sum_sq();
+  t.bulk = p.bulk();
+  t.bulkSq = p.bulk_sq();
+  t.excessSq = p.excess_sq();
   return t;
 }
 
@@ -243,6 +250,11 @@ v1::JobPlan toProto(const JobPlan& plan) {
     p->set_b(e.b);
     p->set_std_err(e.stdErr);
     p->set_sample_var(e.sampleVar);
+    p->set_tau(e.tau);
+    p->set_bulk_b(e.bulkB);
+    p->set_bulk_std_err(e.bulkStdErr);
+    p->set_bulk_var(e.bulkVar);
+    p->set_excess_mean_sq(e.excessMeanSq);
   }
   for (const WorkUnit& u : plan.units) {
     auto* w = p.add_units();
@@ -273,9 +285,11 @@ JobPlan fromProto(const v1::JobPlan& p) {
   plan.norm.bootstrapSamples = n.bootstrap_samples();
   plan.norm.bootstrapSeconds = n.bootstrap_seconds();
   for (const auto& e : n.bootstrap_b()) {
-    for (double v : {e.b(), e.std_err(), e.sample_var()})
+    for (double v : {e.b(), e.std_err(), e.sample_var(), e.bulk_b(), e.bulk_std_err(), e.bulk_var(), e.excess_mean_sq()})
       if (!(std::isfinite(v) && v >= 0)) throw WireError("plan.norm.bootstrap_b", fmt::format("invalid value {}", v));
-    plan.norm.bootstrapB.push_back({e.n(), e.b(), e.std_err(), e.sample_var()});
+    if (!(e.tau() >= 0)) throw WireError("plan.norm.bootstrap_b.tau", fmt::format("invalid value {}", e.tau()));
+    plan.norm.bootstrapB.push_back({e.n(), e.b(), e.std_err(), e.sample_var(), e.tau(), e.bulk_b(), e.bulk_std_err(),
+                                    e.bulk_var(), e.excess_mean_sq()});
   }
   if (p.total_units() != 0 && p.total_units() != uint32_t(p.units_size()))  // a page, not a whole plan
     throw WireError("plan.total_units", fmt::format("{} units in a plan of {}: a page (proto/plan_pages.h)",

@@ -19,7 +19,7 @@ namespace v1 = ::mltfarm::v1;  // the wire's protobuf package
 namespace mlt::wire {
 
 // Bumped whenever a message changes meaning. Every message that crosses processes carries it.
-inline constexpr uint32_t kFormatVersion = 1;
+inline constexpr uint32_t kFormatVersion = 2;  // 2: b's tail split (TargetSums.bulk, BootstrapEstimate.tau)
 // Largest piece of a streamed film, bundle or result (gRPC's default receive limit is 4 MiB).
 inline constexpr size_t kMaxChunkBytes = 1 << 20;
 

@@ -20,6 +20,9 @@
 //  - mmlt on cornell-box and caustic-mirror, pssmlt on cornell-variety: the bootstrap's budget counts the
 //    candidates' cost (numbers drawn) against the chains' mix (bootstrap.h, chainMixCost), so its size
 //    changed there; the other chain jobs kept their bootstrap and their digests.
+//  - pssmlt, pssmlt-bdpt, mmlt on every scene: b_k split at the bootstrap's tail threshold, the bulk
+//    combined by inverse variance and the excess pooled by count (develop.h (D3)-(D5); the weights on all of
+//    c biased b low).
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -168,27 +171,27 @@ const Case kCases[] = {
     Case{"cornell-box", "pt", "e2477efacf36854d0f6c931f162502b23e1a5ef02fa117232aba30912ede9d4d"},
     Case{"cornell-box", "lt", "27913ec2dcea2a849f89b4540baaa5671551030562d72ac315cb72c056568970"},
     Case{"cornell-box", "bdpt", "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
-    Case{"cornell-box", "pssmlt", "2b0748ec268fa88f86347213498ffe7022fd45711269066a058af5b15d9b0f64"},
-    Case{"cornell-box", "pssmlt-bdpt", "c3d79a6b2d324a84c4179a5055b7578bdc87d67aff6a21d17fab73bac8e593ce"},
-    Case{"cornell-box", "mmlt", "e7b417e269263d73020b00eb380fec87eb08e3b49c5f90077d4f7464d94bf381"},
+    Case{"cornell-box", "pssmlt", "f5cfb985bf990ecbe2a7bfa6f0252f530c52145d13a1ececd354522e7292b61d"},
+    Case{"cornell-box", "pssmlt-bdpt", "bf2065f42fc34c14cc87dc8af62f71158664d0bc7555adfcc4f533a2d9999740"},
+    Case{"cornell-box", "mmlt", "74f054853f420e8fac4ba240e8e74833c39a8797dec910acadb5753b893a8b49"},
     Case{"caustic-mirror", "pt", "3723f4618b74a301f9d12494536d2ef877a4b557ab8bf89a74b86cc8865e08e8"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "2e551b84c146d4ee9d8b59508f5c14e52b01e1cac35d3a595a4be731e3c8dc48"},
-    Case{"caustic-mirror", "pssmlt", "a50595dd44568168d060c724daa93e34ec9b1b7496bfdef3ea25502d50bd76d0"},
-    Case{"caustic-mirror", "pssmlt-bdpt", "4cd2cba8f550db6ebf639e246284dda44ff173a0b5e61e1408e4fd42fa919804"},
-    Case{"caustic-mirror", "mmlt", "55a8087de2a43b839129c3104eb883545fb6a9d159e36e712cb49f3d1aa95ae1"},
+    Case{"caustic-mirror", "pssmlt", "09c47caab4a9d30d20f72964f066a8cf9a9ade2eed98cd8c030f1eb2ab159f34"},
+    Case{"caustic-mirror", "pssmlt-bdpt", "5945bb70bd2c6d2ab55639e9496730e439b80bb866b8e4ceda3816109daa9d64"},
+    Case{"caustic-mirror", "mmlt", "bb06af423bd2fcbad61250a7142bb68643d610f3fbc4b2993765464dd5575532"},
     Case{"glossy-plates", "pt", "3e1d8606c1b9797535dd32b0bc0827e2fc6c6090d310b63a1999c98d8c6d1b17"},
     Case{"glossy-plates", "lt", "103658087ff52c3db233f55efb79121213e3e6d6abd21f68cad1f85490f541c5"},
     Case{"glossy-plates", "bdpt", "5531aed294d6cbed77b813522d03d1930c6077c6397cf5f244101b74d1982dee"},
-    Case{"glossy-plates", "pssmlt", "d3d90e78f44a4f95d1148c69fceca0909c8fda9fbfad2afad9a29d6913b0ab91"},
-    Case{"glossy-plates", "pssmlt-bdpt", "3dcf880be73168aed8927240c087d55b10e8a6bd9268c1396a61591e96f46557"},
-    Case{"glossy-plates", "mmlt", "54c467e92f3558392b56e221de484e538bf53676ed079f0b7d16724f2b669673"},
+    Case{"glossy-plates", "pssmlt", "67d18d2fde7ea76c09e831587a9114e374124c3cf766c2a9173af7ae65eb0158"},
+    Case{"glossy-plates", "pssmlt-bdpt", "3bd31665e19e4f50791e65125f3ec5fde40a8cad16b3c480c2d08e1ac624dbd6"},
+    Case{"glossy-plates", "mmlt", "e56263b2ae927c5396ee42a9371803a1bb58ba20e61096eed6f39917d85e067c"},
     Case{"cornell-variety", "pt", "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", "lt", "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", "bdpt", "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
-    Case{"cornell-variety", "pssmlt", "fb9d604ef57256ad74ee7a1598d2a0cf3f16392bd2bfd72a99b375de62efe3fe"},
-    Case{"cornell-variety", "pssmlt-bdpt", "5ab2457091dbf0575456078d698ab929f8151a213fbbe4962367a9e7e6b6e322"},
-    Case{"cornell-variety", "mmlt", "c04b2f7058360f6e8ae309082aebea52e3d43e06e3d56b2121f0054326eb2e3c"},
+    Case{"cornell-variety", "pssmlt", "7b13836794a75637d7704b8b8fc93d3a4a06677a75a1b862de8217bb0b344af3"},
+    Case{"cornell-variety", "pssmlt-bdpt", "0339ef8a5a5fc5828d26ead1c19e10244072d4af40230bbf191e6d99cc5f333f"},
+    Case{"cornell-variety", "mmlt", "809ad802873310bcd3e390cc63492a62b11d167342509864a6a858f2a171547c"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Bundled, GoldenImages, ::testing::ValuesIn(kCases),

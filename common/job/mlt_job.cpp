@@ -326,7 +326,8 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
       norm.bkStdErr[slot] = lb.bStdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
-    norm.bootstrapB[slot] = {lb.c.size(), lb.b, lb.bStdErr, lb.sampleVar};
+    norm.bootstrapB[slot] = {lb.c.size(), lb.b,     lb.bStdErr,     lb.sampleVar, lb.tau,
+                             lb.bulkB,    lb.bulkStdErr, lb.bulkVar, lb.excessMeanSq};
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {
@@ -413,6 +414,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
   config.b = bChain;
+  if (size_t(slot) < plan.norm.bootstrapB.size()) config.tau = plan.norm.bootstrapB[size_t(slot)].tau;
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 

@@ -13,6 +13,56 @@
 
 namespace mlt {
 
+BootstrapEstimate summarizeCandidates(const std::vector<double>& c) {
+  BootstrapEstimate e;
+  const uint64_t N = c.size();
+  e.n = N;
+  if (N == 0) return e;
+  double sum = 0;
+  for (uint64_t i = 0; i < N; ++i) sum += c[i];
+  e.b = sum / double(N);
+  double sq = 0;
+  for (uint64_t i = 0; i < N; ++i) sq += (c[i] - e.b) * (c[i] - e.b);
+  e.sampleVar = N > 1 ? sq / double(N - 1) : 0.0;
+  // Variance of the mean. Candidates spread their film positions evenly (sample_source.h), so the i.i.d.
+  // formula overstates it; with whole randomization groups, their means are i.i.d. and give it exactly.
+  const uint64_t G = kCandidateGroups;
+  const bool grouped = N % G == 0 && N >= 2 * G;
+  const auto groupVarOfMean = [&](auto value, double mean) {
+    std::vector<double> groupSum(G, 0.0);
+    for (uint64_t i = 0; i < N; ++i) groupSum[i % G] += value(c[i]);
+    double gsq = 0;
+    for (uint64_t g = 0; g < G; ++g) {
+      const double d = groupSum[g] / double(N / G) - mean;
+      gsq += d * d;
+    }
+    return gsq / (double(G) * double(G - 1));
+  };
+  e.stdErr = std::sqrt(grouped ? groupVarOfMean([](double x) { return x; }, e.b) : e.sampleVar / double(N));
+  // The tail split (develop.h (D3)): tau = the tailCandidates(N)-th largest c.
+  const uint64_t m = tailCandidates(N);
+  if (N > 2 * m) {
+    std::vector<double> sorted = c;
+    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(N - m), sorted.end());
+    e.tau = sorted[N - m];
+  }
+  const double tau = e.tau;
+  double bulkSum = 0, excessSq = 0;
+  for (uint64_t i = 0; i < N; ++i) {
+    const double x = std::min(c[i], tau);
+    bulkSum += x;
+    excessSq += (c[i] - x) * (c[i] - x);
+  }
+  e.bulkB = bulkSum / double(N);
+  e.excessMeanSq = excessSq / double(N);
+  double bsq = 0;
+  for (uint64_t i = 0; i < N; ++i) bsq += (std::min(c[i], tau) - e.bulkB) * (std::min(c[i], tau) - e.bulkB);
+  e.bulkVar = N > 1 ? bsq / double(N - 1) : 0.0;
+  e.bulkStdErr = std::sqrt(grouped ? groupVarOfMean([tau](double x) { return std::min(x, tau); }, e.bulkB)
+                                   : e.bulkVar / double(N));
+  return e;
+}
+
 namespace {
 
 BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandidateFnFactory& makeCandidateFn,
@@ -57,29 +107,16 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   // Sequential reductions in index order (bit-identical for any thread count).
   const auto reduce = [&](size_t l) {
     LengthBootstrap& lb = result.lengths[l];
-    const uint64_t N = lb.c.size();
-    double sum = 0;
-    for (uint64_t i = 0; i < N; ++i) sum += lb.c[i];
-    lb.b = sum / double(N);
-    double sq = 0;
-    for (uint64_t i = 0; i < N; ++i) sq += (lb.c[i] - lb.b) * (lb.c[i] - lb.b);
-    lb.sampleVar = sq / double(N - 1);
-    // Variance of the mean. Candidates spread their film positions evenly (sample_source.h), so the i.i.d.
-    // formula overstates it; with whole randomization groups, their means are i.i.d. and give it exactly.
-    const uint64_t G = kCandidateGroups;
-    if (N % G == 0 && N >= 2 * G) {
-      std::vector<double> groupSum(G, 0.0);
-      for (uint64_t i = 0; i < N; ++i) groupSum[i % G] += lb.c[i];
-      double gsq = 0;
-      for (uint64_t g = 0; g < G; ++g) {
-        const double d = groupSum[g] / double(N / G) - lb.b;
-        gsq += d * d;
-      }
-      varMean[l] = gsq / (double(G) * double(G - 1));
-    } else {
-      varMean[l] = lb.sampleVar / double(N);
-    }
-    lb.bStdErr = std::sqrt(varMean[l]);
+    const BootstrapEstimate e = summarizeCandidates(lb.c);
+    lb.b = e.b;
+    lb.bStdErr = e.stdErr;
+    lb.sampleVar = e.sampleVar;
+    lb.tau = e.tau;
+    lb.bulkB = e.bulkB;
+    lb.bulkStdErr = e.bulkStdErr;
+    lb.bulkVar = e.bulkVar;
+    lb.excessMeanSq = e.excessMeanSq;
+    varMean[l] = e.stdErr * e.stdErr;
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;

@@ -19,11 +19,14 @@
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
 #pragma once
+#include <algorithm>
+#include <limits>
 #include <cstdint>
 #include <functional>
 #include <vector>
 
 #include "common/mlt/alias_table.h"
+#include "common/mlt/target_sums.h"
 #include "common/sampler/sample_source.h"  // kCandidateSlotBits, kCandidateGroups
 
 namespace mlt {
@@ -59,6 +62,14 @@ struct BootstrapConfig {
   bool parallel = true;
 };
 
+// The candidates above the tail threshold: about 1 in 1024, at least kCandidateGroups (develop.h (D3)).
+inline uint64_t tailCandidates(uint64_t N) { return std::max<uint64_t>(16, N / 1024); }
+
+// b's estimate from the candidates of one length (target_sums.h): mean, standard error from the
+// kCandidateGroups randomization groups (i.i.d. if N is not a multiple of them), sample variance, and the
+// tail split at tau (develop.h (D3)).
+BootstrapEstimate summarizeCandidates(const std::vector<double>& c);
+
 struct LengthBootstrap {
   int pathLength = -1;
   uint64_t firstCandidate = 0;
@@ -67,6 +78,11 @@ struct LengthBootstrap {
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
   double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
   double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
+  // The tail split of develop.h (D3): tau, the tailCandidates(N)-th largest c (infinity with too few
+  // candidates), and the bulk min(c, tau)'s mean, standard error (groups) and variance; mean of the
+  // excess max(c - tau, 0) squared.
+  double tau = std::numeric_limits<double>::infinity();
+  double bulkB = 0, bulkStdErr = 0, bulkVar = 0, excessMeanSq = 0;
   AliasTable table;       // over c; empty if b == 0
 };
 

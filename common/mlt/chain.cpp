@@ -41,7 +41,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     if (kind < 0 || kind >= kMaxMutationKinds)
       throw std::invalid_argument("runChain: mutation kind " + std::to_string(kind) + " out of range");
     ++counts.proposed[kind];
-    if (p.independent) counts.largeSteps.add(cy);
+    if (p.independent) counts.largeSteps.add(cy, config.tau);
 
     double wy, wx;
     if (mis) {

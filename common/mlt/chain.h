@@ -24,6 +24,7 @@
 // Next(), sec. 6): fewer splats, same estimator.
 #pragma once
 #include <cstdint>
+#include <limits>
 
 #include "common/core/rng.h"
 #include "common/integrators/path_evaluator.h"
@@ -73,6 +74,8 @@ struct ChainConfig {
   ChainSplatting splatting = ChainSplatting::ExpectedValue;
   double largeStepProb = 0;  // p_large, for KelemenMIS weights
   double b = 0;              // normalization (KelemenMIS only; must be > 0 there)
+  // The bootstrap's tail threshold for the large steps' sums (develop.h (D3)); infinity: no split.
+  double tau = std::numeric_limits<double>::infinity();
   // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
   // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
   double acceptancePower = 1;

@@ -33,6 +33,9 @@ void quantizeSums(TargetSums& sums, uint64_t jobSeed, uint64_t unitIndex, uint64
   const uint64_t k = hashKeys(hashKeys(jobSeed, unitIndex, 0x6273756dULL), slot, 0);
   sums.sum = quantize(sums.sum, k + 1);
   sums.sumSq = quantize(sums.sumSq, k + 2);
+  sums.bulk = quantize(sums.bulk, k + 3);
+  sums.bulkSq = quantize(sums.bulkSq, k + 4);
+  sums.excessSq = quantize(sums.excessSq, k + 5);
 }
 
 namespace {

@@ -34,14 +34,25 @@
 //    of the chain's state, whether accepted or not, so its c(y) is an i.i.d. uniform sample. Their mean
 //    b_L = S_L / N_L (S = sum of c, merged by addition) has variance sigma^2 / N_L, where sigma^2, the
 //    variance of c for one uniform sample, is estimated by the bootstrap (its i.i.d. sample variance).
-// Combined by inverse variance,
-//     b_k^ = w b_0 + (1 - w) b_L,   w = v_L / (v_0 + v_L),   v_L = sigma^2 / N_L,             (D3)
-//     SE(b_k^) = sqrt(v_0 v_L / (v_0 + v_L)).                                                 (D4)
-// The weights come from the bootstrap only, never from the large steps' own spread (weights that depend
-// on the values they weight bias a heavy-tailed c low); w depends on the bootstrap's values, which
-// leaves a bias of order 1 / N_0, far below SE(b_k^) at the bootstrap's sizes. With no large steps
-// b_k^ = b_0; as the job grows v_L -> 0 and b_k^ -> the large steps' mean: the brightness error
-// shrinks with the job instead of staying at the bootstrap's.                               (D5)
+// Split at the bootstrap's tail threshold tau (its tailCandidates(N_0)-th largest c, about 1 in 1024):
+// c = m + e with the bulk m = min(c, tau) and the excess e = max(c - tau, 0). Every sample's m and e are
+// summed apart (TargetSums; the chains know tau from the plan), and
+//     b_k^ = [w m_0 + (1 - w) m_L] + (N_0 e_0 + N_L e_L) / (N_0 + N_L),
+//     w = v_L / (v_0 + v_L),  v_0 = the groups' variance of m_0,  v_L = Var(m) / N_L,          (D3)
+// the bulk by inverse variance (it keeps the bootstrap's stratification gain: the light seen directly,
+// 6x), the excess pooled by count. SE(b_k^)^2 = w^2 v_0 + (1 - w)^2 max(v_L, S2_L / N_L) + Var(e^)
+// + 2 Cov(m^, e^), with S2_L the large steps' own spread of m (a tail the bootstrap never saw shows there)
+// and Cov = E[e] (tau - E[m]) / N (target_sums.h).                                                 (D4)
+// Why the split: weights estimated from the bootstrap depend on its values. A bootstrap that missed the
+// rare bright paths has a small spread and a low mean and gets more weight, one that caught them less:
+// inverse-variance weights on all of c (the rule before) biased b low by 0.2-1.3% on heavy-tailed targets
+// (tests/mlt_refine_test.cpp, RefinedB.CombinedBIsUnbiasedForAHeavyTailedStratifiedTarget: -1.3%; the
+// chain methods' brightness on the results page leaned low). The bulk is bounded by tau, so its weights
+// hardly move with a tail hit, and the excess's weights are counts: the test measures no bias left
+// (tau itself is a bootstrap value; the bias it leaves is below the test's 0.04% resolution).
+// Pooling all of c by count would be unbiased too, but loses the bulk's stratification gain (on the Cornell
+// box's b_1, 0.0029 -> 0.0042). With no large steps b_k^ = b_0; as the job grows w -> 0 and b_k^ -> the
+// large steps' mean: the brightness error shrinks with the job instead of staying at the bootstrap's. (D5)
 // b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
 // (Using b_k^ from the same run as the splats makes I_j a ratio estimator, biased by O(1/N): negligible
 // beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting still weights

@@ -6,23 +6,37 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace mlt {
 
+// Sums of c over i.i.d. uniform samples, split at the bootstrap's tail threshold tau (develop.h (D3)):
+// the bulk min(c, tau) and the excess max(c - tau, 0) = c - min(c, tau). With tau = infinity (a plan
+// without a threshold) the bulk is c.
 struct TargetSums {
   uint64_t n = 0;           // samples
   double sum = 0;           // S = sum of c
   double sumSq = 0;         // Q = sum of c^2
-  void add(double c) {
+  double bulk = 0;          // sum of min(c, tau)
+  double bulkSq = 0;        // sum of min(c, tau)^2
+  double excessSq = 0;      // sum of max(c - tau, 0)^2
+  void add(double c, double tau = std::numeric_limits<double>::infinity()) {
     ++n;
     sum += c;
     sumSq += c * c;
+    const double m = std::min(c, tau), e = c - m;
+    bulk += m;
+    bulkSq += m * m;
+    excessSq += e * e;
   }
   void add(const TargetSums& o) {
     n += o.n;
     sum += o.sum;
     sumSq += o.sumSq;
+    bulk += o.bulk;
+    bulkSq += o.bulkSq;
+    excessSq += o.excessSq;
   }
   bool operator==(const TargetSums&) const = default;
 };
@@ -48,36 +62,41 @@ inline BEstimate pooledB(const TargetSums& bootstrap, const TargetSums& largeSte
 // The bootstrap's estimate of one length's b: mean of its candidates, the standard error of that mean
 // (from the spread of its randomization groups' means: the candidates' film positions are spread evenly,
 // which an i.i.d. formula would not see), and the variance of c for one uniform sample (which is what
-// each large step is).
+// each large step is). The same for the bulk min(c, tau) below the tail threshold tau (the
+// kTailCandidates-th largest candidate), and the mean of max(c - tau, 0)^2.
 struct BootstrapEstimate {
   uint64_t n = 0;
   double b = 0, stdErr = 0, sampleVar = 0;
+  double tau = std::numeric_limits<double>::infinity();
+  double bulkB = 0, bulkStdErr = 0, bulkVar = 0, excessMeanSq = 0;
   bool operator==(const BootstrapEstimate&) const = default;
 };
 
-// (D5): the bootstrap's b and the large steps' mean, weighted by inverse variance. The large steps' variance
-// in the weights is the model sampleVar / n_L, computed from the bootstrap, never from the large steps
-// themselves: weights that depend on the values they weight would bias a heavy-tailed c low.
-// The standard error reported is Var(w0 b0 + (1 - w0) bL) = w0^2 v0 + (1 - w0)^2 Var(bL), with Var(bL) the
-// larger of the model and the large steps' own spread S2 / n_L: a heavy tail the bootstrap never saw (its
-// model, hence the weights, too small) shows in the large steps that did see it, and the error then says
-// so (caustic-mirror: rare s = 0 paths through the mirror, docs/CHAINS.md). With the model the larger,
-// this is the inverse-variance formula sqrt(v0 vL / (v0 + vL)).
+// (D3)-(D5): the bootstrap's bulk and the large steps' bulk weighted by inverse variance, the excess above
+// tau pooled over every sample by count, and their sum. The weights see the bulk's statistics only.
 inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large) {
   if (large.n == 0) return {boot.b, boot.stdErr, boot.n};
-  const double bL = large.sum / double(large.n);
   if (boot.n == 0) return pooledB({}, large);
-  const double v0 = boot.stdErr * boot.stdErr, vL = boot.sampleVar / double(large.n);
-  const uint64_t n = boot.n + large.n;
-  const double nL = double(large.n);
-  const double spread = large.n > 1 ? std::max(0.0, (large.sumSq - nL * bL * bL) / (nL - 1)) / nL : 0.0;
-  if (!(v0 + vL > 0)) {
-    const double wL = nL / double(n);  // both exact by the model: by count
-    return {(1 - wL) * boot.b + wL * bL, wL * std::sqrt(spread), n};
-  }
-  const double w0 = vL / (v0 + vL);  // the bootstrap's weight
-  const double varL = std::max(vL, spread);
-  return {w0 * boot.b + (1 - w0) * bL, std::sqrt(w0 * w0 * v0 + (1 - w0) * (1 - w0) * varL), n};
+  const double n0 = double(boot.n), nL = double(large.n), n = n0 + nL;
+  // The bulk: inverse variance, v_0 from the groups, v_L from the bootstrap's model (never from the large
+  // steps' own values); both exact (zero variance): by count.
+  const double v0 = boot.bulkStdErr * boot.bulkStdErr, vL = boot.bulkVar / nL;
+  const double w0 = v0 + vL > 0 ? vL / (v0 + vL) : n0 / n;
+  const double bulkL = large.bulk / nL;
+  const double bulk = w0 * boot.bulkB + (1 - w0) * bulkL;
+  const double spreadL = large.n > 1 ? std::max(0.0, (large.bulkSq - nL * bulkL * bulkL) / (nL - 1)) / nL : 0.0;
+  const double varBulk = w0 * w0 * v0 + (1 - w0) * (1 - w0) * std::max(vL, spreadL);
+  // The excess: the pooled mean of every sample's max(c - tau, 0), and its i.i.d. variance.
+  const double excessSum = n0 * (boot.b - boot.bulkB) + (large.sum - large.bulk);
+  const double excess = std::max(0.0, excessSum / n);
+  const double excessSq = n0 * boot.excessMeanSq + large.excessSq;
+  const double varExcess = std::max(0.0, (excessSq - n * excess * excess) / (n - 1)) / n;
+  // The two parts share samples. Per sample Cov(min(c, tau), max(c - tau, 0)) = E[e] (tau - E[m]) (e > 0
+  // only where m = tau); both estimates weigh each sample's part with weights summing to 1 per set, so
+  // Cov(bulk^, excess^) = Cov / n (treating the bootstrap's samples as i.i.d. here).
+  const double cov = excess > 0 ? excess * (boot.tau - (n0 * boot.bulkB + large.bulk) / n) / n : 0.0;
+  const double se = std::sqrt(std::max(0.0, varBulk + varExcess + 2 * cov));
+  return {bulk + excess, se, boot.n + large.n};
 }
 
 // Element-wise sum of per-slot sums (the shorter side counts as zero).

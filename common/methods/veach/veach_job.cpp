@@ -117,6 +117,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
 
   TargetSums bSamples;  // see kMutationsPerBSample
+  const double tau = plan.norm.bootstrapB.empty() ? std::numeric_limits<double>::infinity() : plan.norm.bootstrapB[0].tau;
   {
     static const VeachMltMethod method;
     const std::unique_ptr<PssTarget> candidate = method.makeTarget(scene, s);
@@ -124,7 +125,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     for (uint64_t i = 0, n = veachBSamples(unit.mutations); i < n; ++i) {
       IndependentSource source = IndependentSource::candidate(streamSeed, i);
       candidate->evaluate(source, -1, scratch);
-      bSamples.add(targetFunction(scratch));
+      bSamples.add(targetFunction(scratch), tau);
     }
   }
 
