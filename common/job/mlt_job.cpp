@@ -326,8 +326,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
       norm.bkStdErr[slot] = lb.bStdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
-    norm.bootstrapB[slot] = {lb.c.size(), lb.b,     lb.bStdErr,     lb.sampleVar, lb.tau,
-                             lb.bulkB,    lb.bulkStdErr, lb.bulkVar, lb.excessMeanSq};
+    norm.bootstrapB[slot] = lb.estimate;
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {

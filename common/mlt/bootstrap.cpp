@@ -107,16 +107,11 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   // Sequential reductions in index order (bit-identical for any thread count).
   const auto reduce = [&](size_t l) {
     LengthBootstrap& lb = result.lengths[l];
-    const BootstrapEstimate e = summarizeCandidates(lb.c);
-    lb.b = e.b;
-    lb.bStdErr = e.stdErr;
-    lb.sampleVar = e.sampleVar;
-    lb.tau = e.tau;
-    lb.bulkB = e.bulkB;
-    lb.bulkStdErr = e.bulkStdErr;
-    lb.bulkVar = e.bulkVar;
-    lb.excessMeanSq = e.excessMeanSq;
-    varMean[l] = e.stdErr * e.stdErr;
+    lb.estimate = summarizeCandidates(lb.c);
+    lb.b = lb.estimate.b;
+    lb.bStdErr = lb.estimate.stdErr;
+    lb.sampleVar = lb.estimate.sampleVar;
+    varMean[l] = lb.bStdErr * lb.bStdErr;
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;

@@ -78,11 +78,7 @@ struct LengthBootstrap {
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
   double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
   double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
-  // The tail split of develop.h (D3): tau, the tailCandidates(N)-th largest c (infinity with too few
-  // candidates), and the bulk min(c, tau)'s mean, standard error (groups) and variance; mean of the
-  // excess max(c - tau, 0) squared.
-  double tau = std::numeric_limits<double>::infinity();
-  double bulkB = 0, bulkStdErr = 0, bulkVar = 0, excessMeanSq = 0;
+  BootstrapEstimate estimate;  // all of the above with the tail split of develop.h (D3): what the plan keeps
   AliasTable table;       // over c; empty if b == 0
 };
 
