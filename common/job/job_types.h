@@ -9,6 +9,7 @@
 //   std::vector<Color> img = developImage(plan, merged); // normalization applied once, here
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,11 @@ struct Normalization {
   uint64_t totalMutations = 0;
   uint64_t bootstrapSamples = 0;
   double bootstrapSeconds = 0;
+  // The tail threshold the chains of a slot split their large steps' sums at (develop.h (D3)); infinity
+  // where the plan has no bootstrap for the slot.
+  double tailThreshold(size_t slot) const {
+    return slot < bootstrapB.size() ? bootstrapB[slot].tau : std::numeric_limits<double>::infinity();
+  }
 };
 
 struct JobPlan {

@@ -413,7 +413,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
   config.b = bChain;
-  if (size_t(slot) < plan.norm.bootstrapB.size()) config.tau = plan.norm.bootstrapB[size_t(slot)].tau;
+  config.tau = plan.norm.tailThreshold(size_t(slot));
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 

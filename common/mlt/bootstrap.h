@@ -20,7 +20,6 @@
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
 #pragma once
 #include <algorithm>
-#include <limits>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -63,7 +62,7 @@ struct BootstrapConfig {
 };
 
 // The candidates above the tail threshold: about 1 in 1024, at least kCandidateGroups (develop.h (D3)).
-inline uint64_t tailCandidates(uint64_t N) { return std::max<uint64_t>(16, N / 1024); }
+inline uint64_t tailCandidates(uint64_t N) { return std::max<uint64_t>(kCandidateGroups, N / 1024); }
 
 // b's estimate from the candidates of one length (target_sums.h): mean, standard error from the
 // kCandidateGroups randomization groups (i.i.d. if N is not a multiple of them), sample variance, and the

@@ -63,7 +63,7 @@ inline BEstimate pooledB(const TargetSums& bootstrap, const TargetSums& largeSte
 // (from the spread of its randomization groups' means: the candidates' film positions are spread evenly,
 // which an i.i.d. formula would not see), and the variance of c for one uniform sample (which is what
 // each large step is). The same for the bulk min(c, tau) below the tail threshold tau (the
-// kTailCandidates-th largest candidate), and the mean of max(c - tau, 0)^2.
+// tailCandidates(n)-th largest candidate, bootstrap.h), and the mean of max(c - tau, 0)^2.
 struct BootstrapEstimate {
   uint64_t n = 0;
   double b = 0, stdErr = 0, sampleVar = 0;

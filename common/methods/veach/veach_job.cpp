@@ -117,7 +117,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
 
   TargetSums bSamples;  // see kMutationsPerBSample
-  const double tau = plan.norm.bootstrapB.empty() ? std::numeric_limits<double>::infinity() : plan.norm.bootstrapB[0].tau;
+  const double tau = plan.norm.tailThreshold(0);
   {
     static const VeachMltMethod method;
     const std::unique_ptr<PssTarget> candidate = method.makeTarget(scene, s);
