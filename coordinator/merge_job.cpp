@@ -39,7 +39,7 @@ void Coordinator::merge(int64_t id) {
     fs::create_directories(dir);
     writeFinalImages((dir / "image.tmp.exr").string(), (dir / "image.tmp.png").string(), identity, *plan, merged);
     if (isMarkovChainMethod(plan->settings.method)) {
-      refined = refinedB(plan->norm, merged.stats);
+      refined = refinedB(plan->norm, merged.stats, &merged.film);
       // The workers' wall time per move kind, summed (not in the image: its bytes do not depend on the run).
       const std::string rates = formatMoveRates(makeChainReport(*plan, merged));
       if (!rates.empty())

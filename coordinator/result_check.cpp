@@ -38,7 +38,7 @@ void checkBuffer(const std::vector<RGBd>& values, const std::string& field, int 
 uint32_t maxSplatLayer(const JobPlan& plan) {
   const size_t slots = std::max<size_t>({1, plan.norm.mutationsPerLength.size(),
                                          plan.settings.integrator.maxDepth >= 0 ? size_t(plan.settings.integrator.maxDepth) + 1 : 0});
-  return uint32_t(std::min<size_t>(wire::kMaxSplatLayer, slots + 1));
+  return uint32_t(std::min<size_t>(wire::kMaxSplatLayer, maxChainFilmLayer(slots)));
 }
 
 void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const PartialResult& r) {

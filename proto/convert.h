@@ -19,7 +19,7 @@ namespace v1 = ::mltfarm::v1;  // the wire's protobuf package
 namespace mlt::wire {
 
 // Bumped whenever a message changes meaning. Every message that crosses processes carries it.
-inline constexpr uint32_t kFormatVersion = 2;  // 2: b's tail split (TargetSums.bulk, BootstrapEstimate.tau)
+inline constexpr uint32_t kFormatVersion = 3;  // 2: b's tail split (TargetSums.bulk, BootstrapEstimate.tau); 3: chain layers 1 + 2k, b strata 2 + 2k
 // Largest piece of a streamed film, bundle or result (gRPC's default receive limit is 4 MiB).
 inline constexpr size_t kMaxChunkBytes = 1 << 20;
 
@@ -63,7 +63,7 @@ v1::PartialHeader partialHeader(const PartialResult& r);
 // Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), then the sums of every
 // allocated splat layer in ascending order (3/pixel each; Film::splatLayers lists them, layer 0 always),
 // little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
-inline constexpr uint32_t kMaxSplatLayer = 1026;  // 1 + path length slot; max depth is at most 1024
+inline constexpr uint32_t kMaxSplatLayer = 2050;  // mlt/develop.h maxChainFilmLayer(1025): max depth <= 1024
 std::string encodeFilm(const Film& film);
 Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
                 const std::vector<uint32_t>& layers = {0});

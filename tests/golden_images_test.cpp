@@ -26,6 +26,9 @@
 //
 // rjmlt and veach-mlt were added to the table when they existed (2026-12-03), with the b of develop.h's tail
 // split.
+//  - Every chain method on every scene (pssmlt, pssmlt-bdpt, mmlt, rjmlt, veach-mlt): the large steps' (and
+//    veach-mlt's b samples') bulk post-stratified by film position (develop.h (D6)), and chain layers
+//    renumbered 1 + 2k (their stochastic rounding keys changed with the layer). pt/lt/bdpt unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -174,34 +177,34 @@ const Case kCases[] = {
     Case{"cornell-box", "pt", "e2477efacf36854d0f6c931f162502b23e1a5ef02fa117232aba30912ede9d4d"},
     Case{"cornell-box", "lt", "27913ec2dcea2a849f89b4540baaa5671551030562d72ac315cb72c056568970"},
     Case{"cornell-box", "bdpt", "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
-    Case{"cornell-box", "pssmlt", "f5cfb985bf990ecbe2a7bfa6f0252f530c52145d13a1ececd354522e7292b61d"},
-    Case{"cornell-box", "pssmlt-bdpt", "bf2065f42fc34c14cc87dc8af62f71158664d0bc7555adfcc4f533a2d9999740"},
-    Case{"cornell-box", "mmlt", "74f054853f420e8fac4ba240e8e74833c39a8797dec910acadb5753b893a8b49"},
+    Case{"cornell-box", "pssmlt", "0ef8bfe0fb2003db1856a2402f1023d9dc02f04da471bd52f0e82563d98bd719"},
+    Case{"cornell-box", "pssmlt-bdpt", "d6d428d27e514dd6764bf4b4d28d2eb5d8f8ccc3dabd74c4df1e943b034dddeb"},
+    Case{"cornell-box", "mmlt", "803d208bf48823613e01c9c5d893b7530b5d0933480707b7555515965ed1261d"},
     Case{"caustic-mirror", "pt", "3723f4618b74a301f9d12494536d2ef877a4b557ab8bf89a74b86cc8865e08e8"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "2e551b84c146d4ee9d8b59508f5c14e52b01e1cac35d3a595a4be731e3c8dc48"},
-    Case{"caustic-mirror", "pssmlt", "09c47caab4a9d30d20f72964f066a8cf9a9ade2eed98cd8c030f1eb2ab159f34"},
-    Case{"caustic-mirror", "pssmlt-bdpt", "5945bb70bd2c6d2ab55639e9496730e439b80bb866b8e4ceda3816109daa9d64"},
-    Case{"caustic-mirror", "mmlt", "bb06af423bd2fcbad61250a7142bb68643d610f3fbc4b2993765464dd5575532"},
+    Case{"caustic-mirror", "pssmlt", "ce1c45bb8b2663995ffb8b1c07620074b31c323a5c675591cdbf249386b56e0e"},
+    Case{"caustic-mirror", "pssmlt-bdpt", "1e51268609dfb4d301cef9fa2a875816827c828276eeb4c9134c28fd6b7a4518"},
+    Case{"caustic-mirror", "mmlt", "baf347818bd7416e74d9f8d1f1442cf2895fb272e63240b98acc662547dc3e00"},
     Case{"glossy-plates", "pt", "3e1d8606c1b9797535dd32b0bc0827e2fc6c6090d310b63a1999c98d8c6d1b17"},
     Case{"glossy-plates", "lt", "103658087ff52c3db233f55efb79121213e3e6d6abd21f68cad1f85490f541c5"},
     Case{"glossy-plates", "bdpt", "5531aed294d6cbed77b813522d03d1930c6077c6397cf5f244101b74d1982dee"},
-    Case{"glossy-plates", "pssmlt", "67d18d2fde7ea76c09e831587a9114e374124c3cf766c2a9173af7ae65eb0158"},
-    Case{"glossy-plates", "pssmlt-bdpt", "3bd31665e19e4f50791e65125f3ec5fde40a8cad16b3c480c2d08e1ac624dbd6"},
-    Case{"glossy-plates", "mmlt", "e56263b2ae927c5396ee42a9371803a1bb58ba20e61096eed6f39917d85e067c"},
+    Case{"glossy-plates", "pssmlt", "f02efab0622a388d4a0dcb42e692917cc36fd54a6cb42ebdfec5498865e520d1"},
+    Case{"glossy-plates", "pssmlt-bdpt", "59fc2f9cebbbd7967088f4eca4452ed5766ab3521e6d003b2299e48213029d72"},
+    Case{"glossy-plates", "mmlt", "1c9452168ee1f88fcd552b0f182e3a690384c70847638b1f19f316793413aab4"},
     Case{"cornell-variety", "pt", "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", "lt", "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", "bdpt", "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
-    Case{"cornell-variety", "pssmlt", "7b13836794a75637d7704b8b8fc93d3a4a06677a75a1b862de8217bb0b344af3"},
-    Case{"cornell-variety", "pssmlt-bdpt", "0339ef8a5a5fc5828d26ead1c19e10244072d4af40230bbf191e6d99cc5f333f"},
-    Case{"cornell-variety", "mmlt", "809ad802873310bcd3e390cc63492a62b11d167342509864a6a858f2a171547c"},
-    Case{"cornell-box", "rjmlt", "8580a44a979156581bbead22d87dca6171623da8403a2a8f3529ae16c4dfedd6"},
-    Case{"caustic-mirror", "rjmlt", "87bd9a699e89adc659a7e70a29458fcd7efb247ab9e892946212336f62a4ef84"},
-    Case{"glossy-plates", "rjmlt", "884f3276d998a8440fe5295902202f352606cff3eb98de469afbdf0921611b1f"},
-    Case{"cornell-variety", "rjmlt", "710a07aa59e874822ee05d038d040f79a073aee85c8f006c76aeb281451bcc88"},
-    Case{"cornell-box", "veach-mlt", "c96dcd7909c37eacb4f1c5b8e305314168b28269d4303b9165f325cb16aab5b6"},
-    Case{"caustic-mirror", "veach-mlt", "bae8b1fb70ff222bbb368ff61962ea28331e801a4c1ccc7d4f4d8c34164283e5"},
-    Case{"glossy-plates", "veach-mlt", "5418bf7d5b5c786aa7514feeb0381cb131a198df7af60a8b5106fad09c5bb303"},
+    Case{"cornell-variety", "pssmlt", "65bba77d6d1218ac45b4441985399d4636a07f819647f988533db148bdd34726"},
+    Case{"cornell-variety", "pssmlt-bdpt", "ef0666784cf4b52d02f18e72ed0f46122bf1671a902f7e2564676206c66543b9"},
+    Case{"cornell-variety", "mmlt", "c01e369195dc9a8e904933cbac84c0465c80ade54ed6954e5b9742fd7540aa95"},
+    Case{"cornell-box", "rjmlt", "93f9cdca984d34e3251468957b8fbfecbe3c6d7476469a87d49bca2858d8fbf6"},
+    Case{"caustic-mirror", "rjmlt", "12464709d8839e8e4c62ff982d540359a51945f9b361e9811a7df28d91033d03"},
+    Case{"glossy-plates", "rjmlt", "200cbabeaa351d97ad1af5a4b5655766ac0fd2eb0c4d615db3db6a0c98fa438c"},
+    Case{"cornell-variety", "rjmlt", "88a4ccc4743a34010998907eab8c3bcdca3b40a6ebad917fa33bcb60da80dcf8"},
+    Case{"cornell-box", "veach-mlt", "bca89b21b537a8599343207e30dee7661be023cf9a9afb39d90ea722d285546a"},
+    Case{"caustic-mirror", "veach-mlt", "6783afad6e36a0cfce75d50d680fb42ceb1138219ce4af04a59df57301a8937c"},
+    Case{"glossy-plates", "veach-mlt", "6f626af7b83493c32c97034f40f4d029c456b52067795f71d14ead86d9e04497"},
     // cornell-variety has a directional light, which veach-mlt refuses with a clear error (area, point and
     // spot lights only), so it has no veach-mlt case.
 };

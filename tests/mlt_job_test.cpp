@@ -306,7 +306,7 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   uint64_t chains = 0, mutations = 0;
   double accepted = 0;
   ASSERT_EQ(r.lengths.size(), 4u);  // k = 1..4
-  const RefinedB refined = refinedB(plan.norm, merged.stats);
+  const RefinedB refined = refinedB(plan.norm, merged.stats, &merged.film);
   for (const ChainLengthReport& l : r.lengths) {
     EXPECT_EQ(l.bk, refined.perSlot[size_t(l.k)].b);  // as developed: bootstrap and large steps pooled
     EXPECT_EQ(l.bkStdErr, refined.perSlot[size_t(l.k)].stdErr);

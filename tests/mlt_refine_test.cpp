@@ -302,7 +302,16 @@ TEST(RefinedB, ImageIsDevelopedWithTheRefinedB) {
   for (TargetSums& t : merged.stats.largeStepSums) {
     t.sum *= 2;
     t.sumSq *= 4;
+    t.bulk *= 2;
+    t.bulkSq *= 4;
+    t.excessSq *= 4;
   }
+  for (size_t slot = 0; slot < merged.stats.largeStepSums.size(); ++slot)  // and their strata (D6)
+    if (merged.film.hasSplatLayer(bStrataLayer(slot)))
+      for (RGBd& v : merged.film.splatLayer(bStrataLayer(slot))) {
+        v.g *= 2;
+        v.b *= 4;
+      }
   const std::vector<Color> doubled = developImage(noBoot, merged);
   double a = 0, b = 0, c = 0;
   for (size_t i = 0; i < before.size(); ++i) {
@@ -336,9 +345,10 @@ TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
   for (const WorkUnit& u : plan.units) {
     PartialResult r = runWorkUnit(cornell(), plan, u);
     r.foldSplats();  // a chain unit's splats travel sparse (common/film/sparse_splats.h)
-    ASSERT_TRUE(r.film.hasSplatLayer(chainLayer(size_t(u.pathLength)))) << "unit " << u.index;
-    for (size_t l = 1; l < r.film.splatLayerCount(); ++l)
-      EXPECT_EQ(r.film.hasSplatLayer(l), l == chainLayer(size_t(u.pathLength))) << "unit " << u.index << " layer " << l;
+    const size_t chain = chainLayer(size_t(u.pathLength)), strata = bStrataLayer(size_t(u.pathLength));
+    ASSERT_TRUE(r.film.hasSplatLayer(chain)) << "unit " << u.index;
+    for (size_t l = 1; l < r.film.splatLayerCount(); ++l)  // its splats and its large steps' strata (D6)
+      EXPECT_EQ(r.film.hasSplatLayer(l), l == chain || l == strata) << "unit " << u.index << " layer " << l;
   }
 }
 

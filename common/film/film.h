@@ -11,7 +11,8 @@
 //        derivation in mlt/develop.h)
 //    There is one splat buffer per estimator *component* (a "layer"), each developed with its own scale:
 //    layer 0 is splatSums() (light tracing, bdpt's t = 1, a Markov chain job's direct pass); a Markov
-//    chain job splats path length slot l into layer 1 + l, so that b_k, known only once every chain has
+//    chain job splats path length slot l into layer 1 + 2 l (mlt/develop.h: chainLayer; layer 2 + 2 l holds
+//    b's strata of that length), so that b_k, known only once every chain has
 //    reported its large steps, is applied when the image is developed and never inside a chain. Layers
 //    other than 0 are allocated on first use (a chain's partial film holds only its own).
 // Accumulation order matters for bit-identical results: merge() adds another film element-wise, and

@@ -39,11 +39,17 @@ SparseSplatter::SparseSplatter(int width, int height, uint32_t layer) : width_(w
   if (width <= 0 || height <= 0)
     throw std::invalid_argument("SparseSplatter: film size must be positive, got " + std::to_string(width) + "x" +
                                 std::to_string(height));
-  // One scratch per thread, reused unit after unit; a second splatter alive on the same thread (never in
-  // the executor, possible in a test) gets its own.
-  static thread_local Scratch threadScratch;
-  owned_ = threadScratch.inUse;
-  scratch_ = owned_ ? new Scratch : &threadScratch;
+  // Scratches per thread, reused unit after unit: a chain unit holds two splatters at once (its splats and
+  // its b strata, mlt/develop.h (D6)); a further one alive on the same thread (a test) gets its own.
+  static thread_local Scratch threadScratch[2];
+  Scratch* free = nullptr;
+  for (Scratch& s : threadScratch)
+    if (!s.inUse) {
+      free = &s;
+      break;
+    }
+  owned_ = free == nullptr;
+  scratch_ = owned_ ? new Scratch : free;
   scratch_->inUse = true;
   scratch_->fit(size_t(width) * size_t(height));
   dense_ = scratch_->dense.data();

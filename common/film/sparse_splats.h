@@ -61,6 +61,15 @@ class SparseSplatter {
     }
     dense_[size_t(i)].add(v);
   }
+  // Adds v to pixel `pixel` (< width * height) as it stands: exact doubles, no finiteness rule (the b
+  // strata of develop.h (D6): a count and sums of a bounded value).
+  void addAt(size_t pixel, const RGBd& v) {
+    if (!touched_[pixel]) {
+      touched_[pixel] = 1;
+      list_->push_back(uint32_t(pixel));
+    }
+    dense_[pixel] += v;
+  }
   // The splats so far (one layer, pixels ascending); the scratch is zero again and the splatter empty.
   SparseSplats take();
 
@@ -70,7 +79,7 @@ class SparseSplatter {
   uint32_t layer_;
   uint64_t nonFinite_ = 0;
   struct Scratch;
-  Scratch* scratch_;  // the thread's scratch, or one of its own if the thread's is in use
+  Scratch* scratch_;  // one of the thread's scratches, or one of its own if both are in use
   bool owned_;
   RGBd* dense_;
   uint8_t* touched_;

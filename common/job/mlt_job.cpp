@@ -123,7 +123,7 @@ std::vector<double> allocationWeights(const BootstrapResult& boot) {
   return w;
 }
 
-RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
+RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film) {
   RefinedB r;
   const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
   r.perSlot.resize(slots);
@@ -131,7 +131,17 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged) {
   for (size_t l = 0; l < slots; ++l) {
     const BootstrapEstimate boot = l < norm.bootstrapB.size() ? norm.bootstrapB[l] : BootstrapEstimate{};
     const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
-    r.perSlot[l] = combineB(boot, large);
+    if (film && film->hasSplatLayer(bStrataLayer(l)) && large.n > 0) {
+      const StratifiedMean sm = postStratifiedMean(film->splatLayer(bStrataLayer(l)), film->width(), film->height());
+      if (sm.valid && sm.n == large.n) {  // every large step in its stratum (else the layer is not this job's)
+        const StratifiedBulk strata{sm.mean, sm.var};
+        r.perSlot[l] = combineB(boot, large, &strata);
+      } else {
+        r.perSlot[l] = combineB(boot, large);
+      }
+    } else {
+      r.perSlot[l] = combineB(boot, large);
+    }
     r.total.b += r.perSlot[l].b;
     r.total.samples += r.perSlot[l].samples;
     var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
@@ -408,7 +418,8 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const std::unique_ptr<ChainState> state = spec.makeChainState(source, s, *target, k);
   PssChainTarget chainTarget(*target, source, k);
   SparseSplatter splatter(s.width, s.height, uint32_t(chainLayer(size_t(slot))));
-  SparseSink sink(splatter);  // scaled by b_k P / M_k only when developed (D2)
+  SparseSplatter strata(s.width, s.height, uint32_t(bStrataLayer(size_t(slot))));  // b's strata (D6)
+  SparseSink sink(splatter, &strata, s.width, s.height);  // scaled by b_k P / M_k only when developed (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
@@ -418,6 +429,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 
   result.splats = splatter.take();
+  result.splats.layers.push_back(std::move(strata.take().layers.front()));  // bStrataLayer > chainLayer
   quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
@@ -457,9 +469,9 @@ std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialRes
       directLightPaths += uint64_t(plan.units[i].sampleEnd - plan.units[i].sampleBegin) * P;
   std::vector<double> scales(merged.film.splatLayerCount(), 0.0);
   if (directLightPaths > 0) scales[0] = double(P) / double(directLightPaths);
-  // Layer 1 + slot: (D2) with b_k pooled from bootstrap and large steps (D3) and M_k the mutations of that
+  // chainLayer(slot): (D2) with b_k pooled from bootstrap and large steps (D3) and M_k the mutations of that
   // length merged (all of them once every chain is in; a preview's are a subset, still exact per length).
-  const RefinedB refined = refinedB(plan.norm, merged.stats);
+  const RefinedB refined = refinedB(plan.norm, merged.stats, &merged.film);
   const auto& M = merged.stats.proposedPerLength;
   for (size_t slot = 0; slot < M.size() && chainLayer(slot) < scales.size(); ++slot)
     if (M[slot] > 0 && slot < refined.perSlot.size())

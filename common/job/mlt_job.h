@@ -136,7 +136,8 @@ struct RefinedB {
   std::vector<BEstimate> perSlot;  // index = slot (pssmlt: 0; mmlt: k)
   BEstimate total;
 };
-RefinedB refinedB(const Normalization& norm, const ChainStats& merged);
+// film (optional): the merged film, whose bStrataLayer(slot) layers post-stratify the large steps' bulk (D6).
+RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film = nullptr);
 
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.

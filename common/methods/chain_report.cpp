@@ -57,7 +57,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.method = s.method;
   r.settings = s;
   // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)).
-  const RefinedB refined = refinedB(norm, merged.stats);
+  const RefinedB refined = refinedB(norm, merged.stats, &merged.film);
   r.b = refined.total.b;
   r.bStdErr = refined.total.stdErr;
   r.bBootstrap = norm.b;

@@ -41,7 +41,11 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     if (kind < 0 || kind >= kMaxMutationKinds)
       throw std::invalid_argument("runChain: mutation kind " + std::to_string(kind) + " out of range");
     ++counts.proposed[kind];
-    if (p.independent) counts.largeSteps.add(cy, config.tau);
+    if (p.independent) {
+      counts.largeSteps.add(cy, config.tau);
+      const Vec2 u = state.stratumPoint();
+      if (u.x >= 0 && u.y >= 0) sink.stratumSample(u, std::min(cy, config.tau));
+    }
 
     double wy, wx;
     if (mis) {

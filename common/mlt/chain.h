@@ -27,6 +27,7 @@
 #include <limits>
 
 #include "common/core/rng.h"
+#include "common/core/vec.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/kelemen_source.h"
 #include "common/mlt/target_sums.h"
@@ -54,6 +55,10 @@ class ChainState {
   virtual Proposal propose() = 0;
   virtual void accept() = 0;
   virtual void reject() = 0;
+  // The stratum point of an independent proposal, called after it was evaluated: two of its uniform
+  // coordinates in [0,1)^2 (a primary-sample chain: the camera's film position, Camera[0,1]), by which its
+  // c is post-stratified (develop.h (D6)). Negative: the state has none (b's sums are then pooled only).
+  virtual Vec2 stratumPoint() { return {-1.f, -1.f}; }
 };
 
 // Evaluates the state's current point (the proposal, after propose()) into a path contribution.
@@ -68,6 +73,9 @@ class ChainSink {
  public:
   virtual ~ChainSink() = default;
   virtual void splat(const PathContribution& path, double weight) = 0;
+  // An independent proposal's bulk m = min(c, tau) at its stratum point u in [0,1)^2 (ChainState::
+  // stratumPoint; develop.h (D6)). A sink that keeps no strata ignores it.
+  virtual void stratumSample(Vec2 u, double m) { (void)u, (void)m; }
 };
 
 struct ChainConfig {

@@ -18,8 +18,8 @@
 // Length k has its own target c_k, normalization b_k and M_k mutations; its image is (D1) with (b_k, M_k)
 // and the image is the sum over k:
 //     I_j = sum_k b_k * P / M_k * splatSum_kj.                                 (D2)
-// Every length splats into its own film layer (film.h: layer 1 + k; pssmlt's single length is slot 0,
-// layer 1), so the chains never see b_k: the factor is applied once, here, when the image is developed.
+// Every length splats into its own film layer (film.h: chainLayer(k) = 1 + 2k; pssmlt's single length is
+// slot 0, layer 1), so the chains never see b_k: the factor is applied once, here, when the image is developed.
 // M_k is the number of mutations of length k merged, so a preview of some chains is (D2) over what it
 // holds (each chain is stationary; a subset of chains estimates its lengths' images) and exact.
 //
@@ -53,6 +53,15 @@
 // Pooling all of c by count would be unbiased too, but loses the bulk's stratification gain (on the Cornell
 // box's b_1, 0.0029 -> 0.0042). With no large steps b_k^ = b_0; as the job grows w -> 0 and b_k^ -> the
 // large steps' mean: the brightness error shrinks with the job instead of staying at the bootstrap's. (D5)
+// The large steps' bulk is post-stratified by film position (common/mlt/strata.h): each chain keeps, per
+// pixel of its Camera[0,1] coordinates, the count and sums of its large steps' m in film layer
+// bStrataLayer(k), and m_L in (D3) is the quadtree post-stratified mean of those layers, v_L its estimated
+// variance (D6). Where c varies mostly with the pixel (light or bright walls seen directly) this removes
+// most of the large steps' variance (the bootstrap's Halton positions do the same for m_0); elsewhere it
+// changes little. The two bulks are then weighted by count, w = N_0 / (N_0 + N_L): both are stratified by
+// film position, and weights from the strata's own variance estimate (which moves with their mean where few
+// samples share a stratum) biased b low, by 16% on a small Cornell box (tests/mlt_bundled_test.cpp). The
+// strata's estimated variance enters SE(b_k^) in place of v_L.                                       (D6)
 // b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
 // (Using b_k^ from the same run as the splats makes I_j a ratio estimator, biased by O(1/N): negligible
 // beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting still weights
@@ -84,8 +93,12 @@ constexpr int kQuantumExp = 26;
 
 // (D1): the splat scale of one length's film layer.
 double chainSplatScale(double b, uint64_t totalMutations, size_t pixels);
-// The film layer of path length slot `slot` (pssmlt: 0; mmlt: k).
-inline size_t chainLayer(size_t slot) { return slot + 1; }
+// The film layer of path length slot `slot` (pssmlt: 0; mmlt: k), and the layer of its large steps'
+// strata (D6): per pixel (count, sum of m, sum of m^2), never part of the image (developed with scale 0).
+inline size_t chainLayer(size_t slot) { return 2 * slot + 1; }
+inline size_t bStrataLayer(size_t slot) { return 2 * slot + 2; }
+// The largest film layer a job with `slots` path length slots fills.
+inline size_t maxChainFilmLayer(size_t slots) { return bStrataLayer(slots == 0 ? 0 : slots - 1); }
 
 // Rounds the sums of one work unit to multiples of 2^-kQuantumExp, as quantizeFilm does for films, so that
 // they merge exactly in any grouping.

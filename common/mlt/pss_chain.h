@@ -6,6 +6,7 @@
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/kelemen_source.h"
+#include "common/mlt/strata.h"
 
 namespace mlt {
 
@@ -15,6 +16,10 @@ class PssState final : public ChainState {
   Proposal propose() override {  // symmetric kernels: T-ratio 1
     const MutationType t = source_.startIteration();
     return {int(t), 1.0, t == MutationType::Large};
+  }
+  // The camera's film position coordinates (read now if the target did not: a large step draws them fresh).
+  Vec2 stratumPoint() override {
+    return {source_.read(int(Stream::Camera), 0), source_.read(int(Stream::Camera), 1)};
   }
   void accept() override { source_.accept(); }
   void reject() override { source_.reject(); }
@@ -59,7 +64,7 @@ class EvaluatorTarget final : public ChainTarget {
   SampleSource& source_;
 };
 
-// Splats into one splat layer of a film (a Markov chain job: layer 1 + path length slot, develop.h (D2)),
+// Splats into one splat layer of a film (a Markov chain job: chainLayer(path length slot), develop.h (D2)),
 // unscaled: normalization happens only when the film is developed.
 class FilmSink final : public ChainSink {
  public:
@@ -77,16 +82,23 @@ class FilmSink final : public ChainSink {
 
 // Splats into one unit's sparse splat buffer (common/film/sparse_splats.h), unscaled like FilmSink: what
 // a chain work unit uses, so that it never allocates or scans a dense film.
+// strata (optional): the unit's b strata layer (develop.h (D6)), on a film of the same size.
 class SparseSink final : public ChainSink {
  public:
-  explicit SparseSink(SparseSplatter& splatter) : splatter_(splatter) {}
+  explicit SparseSink(SparseSplatter& splatter, SparseSplatter* strata = nullptr, int width = 0, int height = 0)
+      : splatter_(splatter), strata_(strata), width_(width), height_(height) {}
   void splat(const PathContribution& path, double weight) override {
     const float w = static_cast<float>(weight);
     for (const Splat& s : path.splats) splatter_.addSplat(s.pRaster, s.L * w);
   }
+  void stratumSample(Vec2 u, double m) override {
+    if (strata_) strata_->addAt(strataPixel(u.x, u.y, width_, height_), strataSample(m));
+  }
 
  private:
   SparseSplatter& splatter_;
+  SparseSplatter* strata_;
+  int width_, height_;
 };
 
 }  // namespace mlt

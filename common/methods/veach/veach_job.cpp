@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 #include "common/mlt/develop.h"
 #include "common/mlt/kelemen_source.h"
 #include "common/mlt/pss_chain.h"
+#include "common/mlt/strata.h"
 #include "common/mlt/target.h"
 #include "common/render/render_scene.h"
 
@@ -29,6 +31,8 @@ constexpr int kStartTries = 16;            // a start strategy whose path evalua
 // candidates), and keeps their sums where the other methods keep their large steps' (largeStepSums), merged
 // and quantized alike. A candidate costs ~3-8 mutations (VeachMltMethod::candidateCost), so this is ~8% of
 // the chain's time; it lets the bootstrap stay at kBootstrapShare of the job and b still tighten with it.
+// Their bulk is also kept per pixel of their camera coordinates (bStrataLayer(0)) and post-stratified when
+// the image is developed (develop.h (D6)), as the large steps of the primary-sample chains.
 constexpr uint64_t kMutationsPerBSample = 64;
 // The bootstrap chose a candidate whose every strategy rebuilds to a path with f = 0 in path space (seen
 // on door-ajar at 256x256: about one chain in 10^3, a connection through the door's gap that the path
@@ -117,6 +121,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   const ChainCounts counts = runChain(state, target, config, sink, acceptRng, unit.mutations, current, cx, scratch);
 
   TargetSums bSamples;  // see kMutationsPerBSample
+  SparseSplatter strata(s.width, s.height, uint32_t(bStrataLayer(0)));  // post-stratified by film position (D6)
   const double tau = plan.norm.tailThreshold(0);
   {
     static const VeachMltMethod method;
@@ -125,11 +130,16 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     for (uint64_t i = 0, n = veachBSamples(unit.mutations); i < n; ++i) {
       IndependentSource source = IndependentSource::candidate(streamSeed, i);
       candidate->evaluate(source, -1, scratch);
-      bSamples.add(targetFunction(scratch), tau);
+      const double c = targetFunction(scratch);
+      bSamples.add(c, tau);
+      const int camera = int(Stream::Camera);
+      strata.addAt(strataPixel(source.valueAt(camera, 0), source.valueAt(camera, 1), s.width, s.height),
+                   strataSample(std::min(c, tau)));
     }
   }
 
   result.splats = splatter.take();
+  result.splats.layers.push_back(std::move(strata.take().layers.front()));  // bStrataLayer(0) > chainLayer(0)
   quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
