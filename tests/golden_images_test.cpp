@@ -26,9 +26,10 @@
 //
 // rjmlt and veach-mlt were added to the table when they existed (2026-12-03), with the b of develop.h's tail
 // split.
-//  - Every chain method on every scene (pssmlt, pssmlt-bdpt, mmlt, rjmlt, veach-mlt): the large steps' (and
-//    veach-mlt's b samples') bulk post-stratified by film position (develop.h (D6)), and chain layers
-//    renumbered 1 + 2k (their stochastic rounding keys changed with the layer). pt/lt/bdpt unchanged.
+//  - Every chain method on every scene: pssmlt, pssmlt-bdpt and veach-mlt for b's large steps (veach-mlt's
+//    b samples) post-stratified by film position (develop.h (D6)); mmlt and rjmlt, which keep no strata,
+//    for their chain layers renumbered 1 + 2k (the stochastic rounding keys changed with the layer).
+//    pt/lt/bdpt unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -179,29 +180,29 @@ const Case kCases[] = {
     Case{"cornell-box", "bdpt", "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
     Case{"cornell-box", "pssmlt", "0ef8bfe0fb2003db1856a2402f1023d9dc02f04da471bd52f0e82563d98bd719"},
     Case{"cornell-box", "pssmlt-bdpt", "d6d428d27e514dd6764bf4b4d28d2eb5d8f8ccc3dabd74c4df1e943b034dddeb"},
-    Case{"cornell-box", "mmlt", "803d208bf48823613e01c9c5d893b7530b5d0933480707b7555515965ed1261d"},
+    Case{"cornell-box", "mmlt", "0e69da14ccccea7c8a6065caf249418572ed673f2b6b6394ead068b34860db93"},
     Case{"caustic-mirror", "pt", "3723f4618b74a301f9d12494536d2ef877a4b557ab8bf89a74b86cc8865e08e8"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "2e551b84c146d4ee9d8b59508f5c14e52b01e1cac35d3a595a4be731e3c8dc48"},
     Case{"caustic-mirror", "pssmlt", "ce1c45bb8b2663995ffb8b1c07620074b31c323a5c675591cdbf249386b56e0e"},
     Case{"caustic-mirror", "pssmlt-bdpt", "1e51268609dfb4d301cef9fa2a875816827c828276eeb4c9134c28fd6b7a4518"},
-    Case{"caustic-mirror", "mmlt", "baf347818bd7416e74d9f8d1f1442cf2895fb272e63240b98acc662547dc3e00"},
+    Case{"caustic-mirror", "mmlt", "cb5351386374c9d93e0ba00d312ed18a60e98ee74a258f50d2642d102502e213"},
     Case{"glossy-plates", "pt", "3e1d8606c1b9797535dd32b0bc0827e2fc6c6090d310b63a1999c98d8c6d1b17"},
     Case{"glossy-plates", "lt", "103658087ff52c3db233f55efb79121213e3e6d6abd21f68cad1f85490f541c5"},
     Case{"glossy-plates", "bdpt", "5531aed294d6cbed77b813522d03d1930c6077c6397cf5f244101b74d1982dee"},
     Case{"glossy-plates", "pssmlt", "f02efab0622a388d4a0dcb42e692917cc36fd54a6cb42ebdfec5498865e520d1"},
     Case{"glossy-plates", "pssmlt-bdpt", "59fc2f9cebbbd7967088f4eca4452ed5766ab3521e6d003b2299e48213029d72"},
-    Case{"glossy-plates", "mmlt", "1c9452168ee1f88fcd552b0f182e3a690384c70847638b1f19f316793413aab4"},
+    Case{"glossy-plates", "mmlt", "00cf19e036a8d31c6eb91fc24868306455988cf53c916b4abf21ce935101e565"},
     Case{"cornell-variety", "pt", "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", "lt", "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", "bdpt", "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
     Case{"cornell-variety", "pssmlt", "65bba77d6d1218ac45b4441985399d4636a07f819647f988533db148bdd34726"},
     Case{"cornell-variety", "pssmlt-bdpt", "ef0666784cf4b52d02f18e72ed0f46122bf1671a902f7e2564676206c66543b9"},
-    Case{"cornell-variety", "mmlt", "c01e369195dc9a8e904933cbac84c0465c80ade54ed6954e5b9742fd7540aa95"},
-    Case{"cornell-box", "rjmlt", "93f9cdca984d34e3251468957b8fbfecbe3c6d7476469a87d49bca2858d8fbf6"},
-    Case{"caustic-mirror", "rjmlt", "12464709d8839e8e4c62ff982d540359a51945f9b361e9811a7df28d91033d03"},
-    Case{"glossy-plates", "rjmlt", "200cbabeaa351d97ad1af5a4b5655766ac0fd2eb0c4d615db3db6a0c98fa438c"},
-    Case{"cornell-variety", "rjmlt", "88a4ccc4743a34010998907eab8c3bcdca3b40a6ebad917fa33bcb60da80dcf8"},
+    Case{"cornell-variety", "mmlt", "1110917c9b243f64b82ca375107579bd9da65a34576a6f9df84f50714d04219c"},
+    Case{"cornell-box", "rjmlt", "86a6f4707dd93b2e99a71f00ccfae05d3ea63dc61f034435b680f63a5a8380b4"},
+    Case{"caustic-mirror", "rjmlt", "541791ba0add3e4a5607bc651f1a2304d7458e925ce3178a180d725c7ffeff5e"},
+    Case{"glossy-plates", "rjmlt", "acd9563cf2d8545e1797f1a28cf618c01a419e86153054b5caa693833b390086"},
+    Case{"cornell-variety", "rjmlt", "80d5178d59f9c4cca1307ca4b91fba08b8e7f8a19d33a56ef9e3c7a278dab8da"},
     Case{"cornell-box", "veach-mlt", "bca89b21b537a8599343207e30dee7661be023cf9a9afb39d90ea722d285546a"},
     Case{"caustic-mirror", "veach-mlt", "6783afad6e36a0cfce75d50d680fb42ceb1138219ce4af04a59df57301a8937c"},
     Case{"glossy-plates", "veach-mlt", "6f626af7b83493c32c97034f40f4d029c456b52067795f71d14ead86d9e04497"},

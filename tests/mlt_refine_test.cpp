@@ -345,10 +345,10 @@ TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
   for (const WorkUnit& u : plan.units) {
     PartialResult r = runWorkUnit(cornell(), plan, u);
     r.foldSplats();  // a chain unit's splats travel sparse (common/film/sparse_splats.h)
-    const size_t chain = chainLayer(size_t(u.pathLength)), strata = bStrataLayer(size_t(u.pathLength));
+    const size_t chain = chainLayer(size_t(u.pathLength));
     ASSERT_TRUE(r.film.hasSplatLayer(chain)) << "unit " << u.index;
-    for (size_t l = 1; l < r.film.splatLayerCount(); ++l)  // its splats and its large steps' strata (D6)
-      EXPECT_EQ(r.film.hasSplatLayer(l), l == chain || l == strata) << "unit " << u.index << " layer " << l;
+    for (size_t l = 1; l < r.film.splatLayerCount(); ++l)  // its splats only (mmlt keeps no strata, (D6))
+      EXPECT_EQ(r.film.hasSplatLayer(l), l == chain) << "unit " << u.index << " layer " << l;
   }
 }
 

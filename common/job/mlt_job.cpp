@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -418,18 +419,24 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const std::unique_ptr<ChainState> state = spec.makeChainState(source, s, *target, k);
   PssChainTarget chainTarget(*target, source, k);
   SparseSplatter splatter(s.width, s.height, uint32_t(chainLayer(size_t(slot))));
-  SparseSplatter strata(s.width, s.height, uint32_t(bStrataLayer(size_t(slot))));  // b's strata (D6)
-  SparseSink sink(splatter, &strata, s.width, s.height);  // scaled by b_k P / M_k only when developed (D2)
+  // b's strata (D6), for one-length methods only: mmlt's brightness error is its b_1's (the light seen
+  // directly gets few large steps), where the strata did not help (docs/CHAINS.md), and they cost mmlt's
+  // cheap mutations 10% of their throughput.
+  const bool stratify = !spec.chainsPerLength();
+  std::optional<SparseSplatter> strata;
+  if (stratify) strata.emplace(s.width, s.height, uint32_t(bStrataLayer(size_t(slot))));
+  SparseSink sink(splatter, strata ? &*strata : nullptr, s.width, s.height);  // scaled by b_k P / M_k at develop (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
   config.b = bChain;
   config.tau = plan.norm.tailThreshold(size_t(slot));
+  config.stratifyLargeSteps = stratify;
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 
   result.splats = splatter.take();
-  result.splats.layers.push_back(std::move(strata.take().layers.front()));  // bStrataLayer > chainLayer
+  if (strata) result.splats.layers.push_back(std::move(strata->take().layers.front()));  // bStrataLayer > chainLayer
   quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;

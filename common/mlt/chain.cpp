@@ -43,8 +43,10 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     ++counts.proposed[kind];
     if (p.independent) {
       counts.largeSteps.add(cy, config.tau);
-      const Vec2 u = state.stratumPoint();
-      if (u.x >= 0 && u.y >= 0) sink.stratumSample(u, std::min(cy, config.tau));
+      if (config.stratifyLargeSteps) {
+        const Vec2 u = state.stratumPoint();
+        if (u.x >= 0 && u.y >= 0) sink.stratumSample(u, std::min(cy, config.tau));
+      }
     }
 
     double wy, wx;

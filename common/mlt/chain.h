@@ -84,6 +84,9 @@ struct ChainConfig {
   double b = 0;              // normalization (KelemenMIS only; must be > 0 there)
   // The bootstrap's tail threshold for the large steps' sums (develop.h (D3)); infinity: no split.
   double tau = std::numeric_limits<double>::infinity();
+  // Post-stratify the large steps (develop.h (D6)): pass each one's bulk and ChainState::stratumPoint to
+  // ChainSink::stratumSample.
+  bool stratifyLargeSteps = false;
   // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
   // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
   double acceptancePower = 1;
