@@ -132,17 +132,12 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Fil
   for (size_t l = 0; l < slots; ++l) {
     const BootstrapEstimate boot = l < norm.bootstrapB.size() ? norm.bootstrapB[l] : BootstrapEstimate{};
     const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
+    std::optional<StratifiedBulk> strata;  // (D6), where the chains kept strata
     if (film && film->hasSplatLayer(bStrataLayer(l)) && large.n > 0) {
       const StratifiedMean sm = postStratifiedMean(film->splatLayer(bStrataLayer(l)), film->width(), film->height());
-      if (sm.valid && sm.n == large.n) {  // every large step in its stratum (else the layer is not this job's)
-        const StratifiedBulk strata{sm.mean, sm.var};
-        r.perSlot[l] = combineB(boot, large, &strata);
-      } else {
-        r.perSlot[l] = combineB(boot, large);
-      }
-    } else {
-      r.perSlot[l] = combineB(boot, large);
+      if (sm.valid && sm.n == large.n) strata = StratifiedBulk{sm.mean, sm.var};  // every large step, once
     }
+    r.perSlot[l] = combineB(boot, large, strata ? &*strata : nullptr);
     r.total.b += r.perSlot[l].b;
     r.total.samples += r.perSlot[l].samples;
     var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
