@@ -93,7 +93,7 @@ TEST(Bootstrap, BitIdenticalForAnyThreadCount) {
     EXPECT_EQ(std::memcmp(&r->bStdErr, &a.bStdErr, sizeof(double)), 0);
     for (size_t l = 0; l < a.lengths.size(); ++l) {
       EXPECT_EQ(r->lengths[l].c, a.lengths[l].c);
-      EXPECT_EQ(std::memcmp(&r->lengths[l].b, &a.lengths[l].b, sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&r->lengths[l].estimate.b, &a.lengths[l].estimate.b, sizeof(double)), 0);
       for (int j = 0; j < 1000; ++j)
         EXPECT_EQ(r->lengths[l].table.sample(j / 1000.0), a.lengths[l].table.sample(j / 1000.0));
     }
@@ -211,9 +211,9 @@ TEST(Bootstrap, GrowsTheNoisiestLengthUntilBIsKnownToTheTarget) {
   for (size_t i = 0; i < half; ++i) sum += rare.c[i];
   const double bHalf = sum / double(half);
   for (size_t i = 0; i < half; ++i) sq += (rare.c[i] - bHalf) * (rare.c[i] - bHalf);
-  const double varHalf = sq / (double(half) * double(half - 1)) + wide.lengths[1].bStdErr * wide.lengths[1].bStdErr;
-  EXPECT_GT(std::sqrt(varHalf) / (bHalf + wide.lengths[1].b), 0.01);
-  EXPECT_NEAR(rare.b, 0.005 * 200.0, 5 * rare.bStdErr);
+  const double varHalf = sq / (double(half) * double(half - 1)) + wide.lengths[1].estimate.stdErr * wide.lengths[1].estimate.stdErr;
+  EXPECT_GT(std::sqrt(varHalf) / (bHalf + wide.lengths[1].estimate.b), 0.01);
+  EXPECT_NEAR(rare.estimate.b, 0.005 * 200.0, 5 * rare.estimate.stdErr);
 
   const BootstrapResult one = sizedBootstrap(1, 64);
   EXPECT_EQ(one.lengths[0].c, rare.c);
@@ -261,8 +261,8 @@ TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
   const double c1 = candidateCost(costed.lengths[0]), c2 = candidateCost(costed.lengths[1]);
   EXPECT_DOUBLE_EQ(c1, kCandidateOverhead);
   EXPECT_DOUBLE_EQ(c2, 9 * kCandidateOverhead);
-  const double bothB = costed.lengths[0].b + costed.lengths[1].b;
-  const double mix = (costed.lengths[0].b * c1 + costed.lengths[1].b * c2) / bothB;
+  const double bothB = costed.lengths[0].estimate.b + costed.lengths[1].estimate.b;
+  const double mix = (costed.lengths[0].estimate.b * c1 + costed.lengths[1].estimate.b * c2) / bothB;
   EXPECT_NEAR(chainMixCost(costed.lengths), mix, 1e-12 * mix);
   const double spent = double(costed.lengths[0].c.size()) * c1 + double(costed.lengths[1].c.size()) * c2;
   EXPECT_LE(spent, double(bc.totalCandidates) * mix);

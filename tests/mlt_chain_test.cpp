@@ -209,7 +209,7 @@ TEST(MltChain1D, BootstrapEstimatesB) {
   const double iidStdErr = std::sqrt(0.405 / 1e6);  // standard error of the mean of N i.i.d. p(U): sqrt(0.9^2 / 2 / N)
   EXPECT_NEAR(boot.b, 1.0, 4 * boot.bStdErr + 1e-6);
   // A candidate alone is a uniform sample: the variance of p(U), 0.9^2 / 2.
-  EXPECT_NEAR(boot.lengths[0].sampleVar, 0.405, 0.05 * 0.405);
+  EXPECT_NEAR(boot.lengths[0].estimate.sampleVar, 0.405, 0.05 * 0.405);
   // The candidates' coordinate 0 is spread evenly (a randomized Halton sequence): for this smooth density the
   // mean is far more precise than from i.i.d. samples, and the group-based standard error says so.
   EXPECT_LT(boot.bStdErr, 0.1 * iidStdErr);

@@ -196,7 +196,7 @@ TEST(MltJob, MmltAllocatesMutationsByAllocationWeights) {
   for (double x : w) sumW += x;
   uint64_t total = 0;
   for (int k = 1; k <= 4; ++k) {
-    EXPECT_EQ(n.bk[k], boot.result.lengths[k - 1].b) << k;
+    EXPECT_EQ(n.bk[k], boot.result.lengths[k - 1].estimate.b) << k;
     EXPECT_LT(std::fabs(double(n.mutationsPerLength[k]) - double(n.totalMutations) * w[k - 1] / sumW), 1.0) << k;
     total += n.mutationsPerLength[k];
     uint64_t unitsTotal = 0;
@@ -225,7 +225,7 @@ TEST(MltJob, AllocationWeightsFollowWhereTheLightLands) {
       lb.bin.push_back(c(i) > 0 ? uint32_t(i % bins) : kNoBin);
       sum += c(i);
     }
-    lb.b = sum / double(N);
+    lb.estimate.b = sum / double(N);
     return lb;
   };
   BootstrapResult uniform;

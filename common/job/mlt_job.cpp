@@ -119,7 +119,7 @@ std::vector<double> allocationWeights(const BootstrapResult& boot) {
         sumC += lb.c[i];
         sumCg += lb.c[i] / (image[lb.bin[i]] * image[lb.bin[i]] + kAllocationEps);
       }
-    w.push_back(sumC > 0 ? lb.b * std::sqrt(sumCg / sumC) : 0.0);
+    w.push_back(sumC > 0 ? lb.estimate.b * std::sqrt(sumCg / sumC) : 0.0);
   }
   return w;
 }
@@ -310,7 +310,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   // proportional to b_k, for one length), largest remainder ----
   std::vector<double> weights = allocationWeights(boot);
   if (weights.empty())
-    for (const auto& lb : boot.lengths) weights.push_back(lb.b);
+    for (const auto& lb : boot.lengths) weights.push_back(lb.estimate.b);
   const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, weights) : std::vector<uint64_t>(weights.size(), 0);
   const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
   std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, weights) : std::vector<uint64_t>(weights.size(), 0);
@@ -328,8 +328,8 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     const LengthBootstrap& lb = boot.lengths[l];
     const int slot = lb.pathLength < 0 ? 0 : lb.pathLength;
     if (spec.chainsPerLength()) {
-      norm.bk[slot] = lb.b;
-      norm.bkStdErr[slot] = lb.bStdErr;
+      norm.bk[slot] = lb.estimate.b;
+      norm.bkStdErr[slot] = lb.estimate.stdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
     norm.bootstrapB[slot] = lb.estimate;

@@ -108,10 +108,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   const auto reduce = [&](size_t l) {
     LengthBootstrap& lb = result.lengths[l];
     lb.estimate = summarizeCandidates(lb.c);
-    lb.b = lb.estimate.b;
-    lb.bStdErr = lb.estimate.stdErr;
-    lb.sampleVar = lb.estimate.sampleVar;
-    varMean[l] = lb.bStdErr * lb.bStdErr;
+    varMean[l] = lb.estimate.stdErr * lb.estimate.stdErr;
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;
@@ -150,7 +147,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     for (;;) {
       double b = 0, var = 0;
       for (size_t l = 0; l < result.lengths.size(); ++l) {
-        b += result.lengths[l].b;
+        b += result.lengths[l].estimate.b;
         var += varMean[l];
       }
       if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
@@ -167,13 +164,13 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   double var = 0;
   for (size_t l = 0; l < result.lengths.size(); ++l) {
     LengthBootstrap& lb = result.lengths[l];
-    if (lb.b > 0) lb.table = AliasTable(lb.c);
-    result.b += lb.b;
+    if (lb.estimate.b > 0) lb.table = AliasTable(lb.c);
+    result.b += lb.estimate.b;
     var += varMean[l];
     result.candidates += lb.c.size();
     if (lb.pathLength >= 0)
-      spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.b, lb.bStdErr,
-                   lb.b > 0 ? 100 * lb.bStdErr / lb.b : 0.0, lb.c.size());
+      spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.estimate.b, lb.estimate.stdErr,
+                   lb.estimate.b > 0 ? 100 * lb.estimate.stdErr / lb.estimate.b : 0.0, lb.c.size());
   }
   result.bStdErr = std::sqrt(var);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -211,8 +208,8 @@ double chainMixCost(const std::vector<LengthBootstrap>& lengths) {
   double b = 0, bCost = 0, mean = 0;
   for (const LengthBootstrap& lb : lengths) {
     const double cost = chainCost(lb);
-    b += lb.b;
-    bCost += lb.b * cost;
+    b += lb.estimate.b;
+    bCost += lb.estimate.b * cost;
     mean += cost / double(lengths.size());
   }
   return b > 0 ? bCost / b : (lengths.empty() ? kCandidateOverhead : mean);

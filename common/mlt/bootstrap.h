@@ -75,9 +75,9 @@ struct LengthBootstrap {
   std::vector<double> c;  // target value of each candidate
   std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
-  double b = 0, bStdErr = 0;  // mean; its standard error from the kCandidateGroups group means
-  double sampleVar = 0;       // variance of c per candidate (i.i.d. formula): a uniform sample's variance
-  BootstrapEstimate estimate;  // all of the above with the tail split of develop.h (D3): what the plan keeps
+  // b (the mean), stdErr (from the kCandidateGroups group means), sampleVar (c's variance per candidate,
+  // i.i.d. formula: a uniform sample's variance) and the tail split of develop.h (D3): what the plan keeps.
+  BootstrapEstimate estimate;
   AliasTable table;       // over c; empty if b == 0
 };
 
