@@ -46,6 +46,8 @@ class SparseSplatter {
   ~SparseSplatter();
   SparseSplatter(const SparseSplatter&) = delete;
   SparseSplatter& operator=(const SparseSplatter&) = delete;
+  int width() const { return width_; }
+  int height() const { return height_; }
 
   // As Film::addSplat into this layer.
   void addSplat(Vec2 pRaster, const Color& v) {

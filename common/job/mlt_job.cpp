@@ -132,12 +132,11 @@ RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Fil
   for (size_t l = 0; l < slots; ++l) {
     const BootstrapEstimate boot = l < norm.bootstrapB.size() ? norm.bootstrapB[l] : BootstrapEstimate{};
     const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
-    std::optional<StratifiedBulk> strata;  // (D6), where the chains kept strata
-    if (film && film->hasSplatLayer(bStrataLayer(l)) && large.n > 0) {
-      const StratifiedMean sm = postStratifiedMean(film->splatLayer(bStrataLayer(l)), film->width(), film->height());
-      if (sm.valid && sm.n == large.n) strata = StratifiedBulk{sm.mean, sm.var};  // every large step, once
-    }
-    r.perSlot[l] = combineB(boot, large, strata ? &*strata : nullptr);
+    StratifiedMean strata;  // (D6), where the chains kept strata
+    if (film && film->hasSplatLayer(bStrataLayer(l)) && large.n > 0)
+      strata = postStratifiedMean(film->splatLayer(bStrataLayer(l)), film->width(), film->height());
+    const bool useStrata = strata.valid && strata.n == large.n;  // every large step, once
+    r.perSlot[l] = combineB(boot, large, useStrata ? &strata : nullptr);
     r.total.b += r.perSlot[l].b;
     r.total.samples += r.perSlot[l].samples;
     var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
@@ -420,7 +419,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const bool stratify = !spec.chainsPerLength();
   std::optional<SparseSplatter> strata;
   if (stratify) strata.emplace(s.width, s.height, uint32_t(bStrataLayer(size_t(slot))));
-  SparseSink sink(splatter, strata ? &*strata : nullptr, s.width, s.height);  // scaled by b_k P / M_k at develop (D2)
+  SparseSink sink(splatter, strata ? &*strata : nullptr);  // scaled by b_k P / M_k at develop (D2)
   ChainConfig config;
   config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;

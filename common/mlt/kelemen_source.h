@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "common/core/rng.h"
+#include "common/core/vec.h"
 #include "common/sampler/sample_source.h"
 
 namespace mlt {
@@ -71,6 +72,10 @@ class KelemenSource final : public SampleSource {
 
   // Current value of a coordinate (applies pending mutations, exactly like next1D()).
   float read(int stream, int index);
+  // The camera's film position numbers Camera[0,1] of the current proposal, read(): a large step's are
+  // drawn now if its target did not read them. The stratum point of a primary-sample chain's large step
+  // (chain.h, ChainState::stratumPoint).
+  Vec2 filmPositionNumbers() { return {read(int(Stream::Camera), 0), read(int(Stream::Camera), 1)}; }
   // Reversible jumps (Bitterli et al. 2017): sets a coordinate in the current iteration, recorded on the
   // touched list like a read so that reject() restores it exactly. A jump's iteration (started as a
   // small step) writes every coordinate its target reads, so none of them is lazily mutated.

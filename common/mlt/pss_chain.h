@@ -17,10 +17,7 @@ class PssState final : public ChainState {
     const MutationType t = source_.startIteration();
     return {int(t), 1.0, t == MutationType::Large};
   }
-  // The camera's film position coordinates (read now if the target did not: a large step draws them fresh).
-  Vec2 stratumPoint() override {
-    return {source_.read(int(Stream::Camera), 0), source_.read(int(Stream::Camera), 1)};
-  }
+  Vec2 stratumPoint() override { return source_.filmPositionNumbers(); }
   void accept() override { source_.accept(); }
   void reject() override { source_.reject(); }
 
@@ -85,20 +82,19 @@ class FilmSink final : public ChainSink {
 // strata (optional): the unit's b strata layer (develop.h (D6)), on a film of the same size.
 class SparseSink final : public ChainSink {
  public:
-  explicit SparseSink(SparseSplatter& splatter, SparseSplatter* strata = nullptr, int width = 0, int height = 0)
-      : splatter_(splatter), strata_(strata), width_(width), height_(height) {}
+  explicit SparseSink(SparseSplatter& splatter, SparseSplatter* strata = nullptr)
+      : splatter_(splatter), strata_(strata) {}
   void splat(const PathContribution& path, double weight) override {
     const float w = static_cast<float>(weight);
     for (const Splat& s : path.splats) splatter_.addSplat(s.pRaster, s.L * w);
   }
   void stratumSample(Vec2 u, double m) override {
-    if (strata_) strata_->addAt(strataPixel(u.x, u.y, width_, height_), strataSample(m));
+    if (strata_) strata_->addAt(strataPixel(u.x, u.y, strata_->width(), strata_->height()), strataSample(m));
   }
 
  private:
   SparseSplatter& splatter_;
   SparseSplatter* strata_;
-  int width_, height_;
 };
 
 }  // namespace mlt

@@ -22,16 +22,9 @@
 #include <vector>
 
 #include "common/film/film.h"
+#include "common/mlt/target_sums.h"  // StratifiedMean
 
 namespace mlt {
-
-struct StratifiedMean {
-  bool valid = false;  // at least 2 samples (else no variance: the caller pools)
-  uint64_t n = 0;      // samples
-  double mean = 0;     // m^ (D6)
-  double var = 0;      // Var(m^) as estimated (D6)
-  uint64_t strata = 0; // strata used
-};
 
 // The film layer value one large step adds at its pixel: (1, m, m^2).
 inline RGBd strataSample(double m) { return RGBd{1.0, m, m * m}; }

@@ -72,10 +72,13 @@ struct BootstrapEstimate {
   bool operator==(const BootstrapEstimate&) const = default;
 };
 
-// The large steps' bulk post-stratified by film position (strata.h, develop.h (D6)): its mean and the
-// estimated variance of that mean.
-struct StratifiedBulk {
-  double mean = 0, var = 0;
+// The large steps' bulk post-stratified by film position (strata.h, postStratifiedMean; develop.h (D6)).
+struct StratifiedMean {
+  bool valid = false;  // at least 2 samples (else no variance: the caller pools)
+  uint64_t n = 0;      // samples
+  double mean = 0;     // m^ (D6)
+  double var = 0;      // Var(m^) as estimated (D6)
+  uint64_t strata = 0; // strata used
 };
 
 // (D3)-(D5): the bootstrap's bulk and the large steps' bulk weighted by inverse variance, the excess above
@@ -86,7 +89,7 @@ struct StratifiedBulk {
 // where few samples share a stratum, biased b low by 16% on a small Cornell box), and the strata's
 // estimated variance enters the stated standard error.
 inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large,
-                          const StratifiedBulk* strata = nullptr) {
+                          const StratifiedMean* strata = nullptr) {
   if (large.n == 0) return {boot.b, boot.stdErr, boot.n};
   if (boot.n == 0 && !strata) return pooledB({}, large);
   const double n0 = double(boot.n), nL = double(large.n), n = n0 + nL;
@@ -97,9 +100,11 @@ inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large
   const double w0 = strata || !(v0 + vL > 0) ? n0 / n : vL / (v0 + vL);
   const double bulkL = strata ? strata->mean : large.bulk / nL;
   const double bulk = w0 * boot.bulkB + (1 - w0) * bulkL;
-  const double plainL = large.bulk / nL;
-  const double spreadL = large.n > 1 ? std::max(0.0, (large.bulkSq - nL * plainL * plainL) / (nL - 1)) / nL : 0.0;
-  const double varBulk = w0 * w0 * v0 + (1 - w0) * (1 - w0) * (strata ? vL : std::max(vL, spreadL));
+  // The large steps' stated variance: the strata's estimate, or the larger of the model and their own spread.
+  const auto spreadL = [&] {
+    return large.n > 1 ? std::max(0.0, (large.bulkSq - nL * bulkL * bulkL) / (nL - 1)) / nL : 0.0;
+  };
+  const double varBulk = w0 * w0 * v0 + (1 - w0) * (1 - w0) * (strata ? vL : std::max(vL, spreadL()));
   // The excess: the pooled mean of every sample's max(c - tau, 0), and its i.i.d. variance.
   const double excessSum = n0 * (boot.b - boot.bulkB) + (large.sum - large.bulk);
   const double excess = std::max(0.0, excessSum / n);

@@ -60,10 +60,7 @@ class RjmltState final : public ChainState, public ChainTarget {
   void adopt(const MmltPath& start, bool valid);
 
   Proposal propose() override;
-  // As MMLT's (PssState): the camera's film position coordinates of a large step.
-  Vec2 stratumPoint() override {
-    return {source_.read(int(Stream::Camera), 0), source_.read(int(Stream::Camera), 1)};
-  }
+  Vec2 stratumPoint() override { return source_.filmPositionNumbers(); }
   void accept() override;
   void reject() override;
   void evaluate(PathContribution& out) override;
