@@ -2,6 +2,8 @@
 // Normalization is derived in common/mlt/develop.h; the chain loop is common/mlt/chain.h.
 #include "common/job/mlt_job.h"
 
+#include "common/job/emission_estimate.h"
+
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -248,6 +250,24 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     };
   };
   out.result = runBinnedBootstrap(bc, candidates);
+  if (spec.chainsPerLength() && out.result.lengths.front().pathLength == 1) {
+    // b_1 from camera rays (emission_estimate.h, (E1)); the candidates still seed the chains of length 1.
+    const auto t0 = std::chrono::steady_clock::now();
+    LengthBootstrap& l1 = out.result.lengths.front();
+    const EmissionEstimate e1 = emissionEstimate(scene, s, l1.estimate.sampleVar);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
+                 "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
+                 spec.name(), e1.estimate.b, e1.estimate.stdErr, e1.rays, e1.cellsPerPixelAxis, e1.cellsPerPixelAxis,
+                 e1.edgeCells, e1.edgeRays, seconds,
+                 l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
+    out.result.b += e1.estimate.b - l1.estimate.b;
+    out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
+                                                     l1.estimate.stdErr * l1.estimate.stdErr +
+                                                     e1.estimate.stdErr * e1.estimate.stdErr));
+    l1.estimate = e1.estimate;
+    out.result.seconds += seconds;
+  }
   if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
   // Unlimited depth: one more block of lengths while the last one carried more than

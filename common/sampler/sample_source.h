@@ -89,7 +89,10 @@ class IndependentSource final : public SampleSource {
     s.candidate_ = true;
     return s;
   }
-  void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; }
+  void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; pixelPoint_ = false; }
+  // Camera [0,1] (the position in the pixel) read as u instead of hashed numbers, until the next reset
+  // (stratifiedPixelPoint: a pixel's samples spread over its area).
+  void setPixelPoint(Vec2 u) { pixelPoint_ = true; u_ = u; }
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
   float next1D() override {
@@ -99,6 +102,7 @@ class IndependentSource final : public SampleSource {
   // Numbers drawn by next1D so far: a deterministic measure of the work of the path that drew them.
   uint32_t reads() const { return reads_; }
   float valueAt(int stream, int coordinate) const {
+    if (pixelPoint_ && stream == 0 && coordinate < 2) return coordinate == 0 ? u_.x : u_.y;
     if (candidate_)
       if (const int axis = candidateAxis(stream, coordinate); axis >= 0) return candidateCoordinate(seed_, index_, axis);
     return hashUniform(seed_, index_, static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate));
@@ -106,7 +110,8 @@ class IndependentSource final : public SampleSource {
 
  private:
   uint64_t seed_, index_;
-  bool candidate_ = false;
+  bool candidate_ = false, pixelPoint_ = false;
+  Vec2 u_;
   int stream_ = 0, next_ = 0;
   uint32_t reads_ = 0;
 };
@@ -125,6 +130,28 @@ inline float candidateCoordinate(uint64_t seed, uint64_t candidate, int axis) {
   v -= std::floor(v);
   const float out = static_cast<float>(v);
   return out < 1.0f ? out : 0.0f;
+}
+
+// Sample k of n of one pixel, spread over the pixel: the Hammersley point ((k + 1/2) / n, radical inverse
+// of k in base 2), shifted modulo 1 by a random offset of `key` (Cranley-Patterson rotation). Each point
+// is uniform on its own, so a pixel's mean stays unbiased, and the n points cover the pixel evenly: where
+// an edge crosses the pixel the mean's variance falls about as n^-1.5 instead of n^-1.
+inline Vec2 stratifiedPixelPoint(uint64_t key, uint32_t k, uint32_t n) {
+  uint32_t bits = k;  // radical inverse in base 2: the bits of k reversed
+  bits = (bits << 16) | (bits >> 16);
+  bits = ((bits & 0x00ff00ffu) << 8) | ((bits & 0xff00ff00u) >> 8);
+  bits = ((bits & 0x0f0f0f0fu) << 4) | ((bits & 0xf0f0f0f0u) >> 4);
+  bits = ((bits & 0x33333333u) << 2) | ((bits & 0xccccccccu) >> 2);
+  bits = ((bits & 0x55555555u) << 1) | ((bits & 0xaaaaaaaau) >> 1);
+  const double p[2] = {(double(k) + 0.5) / double(n), double(bits) * 0x1p-32};
+  float out[2];
+  for (int a = 0; a < 2; ++a) {
+    double v = p[a] + double(hashKeys(key, 0x70697870ULL, uint64_t(a)) >> 11) * 0x1p-53;
+    v -= std::floor(v);
+    out[a] = static_cast<float>(v);
+    if (!(out[a] < 1.0f)) out[a] = 0.0f;
+  }
+  return {out[0], out[1]};
 }
 
 // A fixed vector per stream; reads past the end return `fill`. For tests and for replaying a path.

@@ -1,0 +1,152 @@
+#include "common/job/emission_estimate.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/core/rng.h"
+#include "common/integrators/evaluators.h"
+#include "common/render/render_scene.h"
+#include "common/sampler/sample_source.h"
+
+namespace mlt {
+
+namespace {
+
+constexpr float kBelowOne = 0x1.fffffep-1f;  // the largest float < 1
+constexpr uint64_t kPilotKey = 0x656d6970ULL, kStageKey = 0x656d6973ULL;  // "emip", "emis"
+
+// One camera ray through pixel (x, y) at the position u in the pixel: the luminance of Le seen.
+double emissionSeen(const PathEvaluator& pt, IndependentSource& source, PathContribution& path, int x, int y, Vec2 u) {
+  source.setPixelPoint(u);
+  path.clear();
+  const Vec2 pixel{float(x), float(y)};
+  pt.evaluate(source, &pixel, path);
+  Color L;
+  for (const Splat& sp : path.splats) L += sp.L;
+  const double v = luminance(L);
+  if (!(std::isfinite(v) && v >= 0))
+    throw std::runtime_error("emission estimate: the ray through pixel (" + std::to_string(x) + ", " +
+                             std::to_string(y) + ") sees invalid emission " + std::to_string(v));
+  return v;
+}
+
+template <typename Body>
+void forRows(int height, bool parallel, const Body& body) {
+  const auto rows = [&](const tbb::blocked_range<int>& r) {
+    for (int y = r.begin(); y != r.end(); ++y) body(y);
+  };
+  if (parallel) tbb::parallel_for(tbb::blocked_range<int>(0, height, 4), rows);
+  else rows(tbb::blocked_range<int>(0, height));
+}
+
+}  // namespace
+
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, double c1Var, bool parallel) {
+  const int W = scene.camera().width(), H = scene.camera().height();  // the film
+  if (W <= 0 || H <= 0) throw std::invalid_argument("emission estimate: empty film");
+  IntegratorSettings oneSegment = s.integrator;
+  oneSegment.maxDepth = 1;  // Le at the first hit (or an environment light on a miss); no light sampling
+  const std::unique_ptr<PathEvaluator> pt = makeEvaluator(scene, "pt", oneSegment);
+  // Cells: G x G per pixel, so that there are at least kEmissionMinCells.
+  const double P = double(W) * double(H);
+  const int G = int(std::max(1.0, std::ceil(std::sqrt(double(kEmissionMinCells) / P))));
+  const int X = W * G, Y = H * G;
+  const size_t C = size_t(X) * size_t(Y);
+  // A ray through cell (cx, cy) at u in the cell.
+  const auto seen = [&](IndependentSource& source, PathContribution& path, int cx, int cy, Vec2 u) {
+    const float ux = std::min((float(cx % G) + u.x) / float(G), kBelowOne);
+    const float uy = std::min((float(cy % G) + u.y) / float(G), kBelowOne);
+    return emissionSeen(*pt, source, path, cx / G, cy / G, Vec2(ux, uy));
+  };
+
+  // 1. The pilot.
+  std::vector<double> pilot(C);
+  forRows(Y, parallel, [&](int y) {
+    IndependentSource source(0, 0);
+    PathContribution path;
+    for (int x = 0; x < X; ++x) {
+      const uint64_t j = uint64_t(y) * uint64_t(X) + uint64_t(x);
+      source.reset(hashKeys(s.seed, kPilotKey, j), 0);
+      pilot[j] = seen(source, path, x, y, Vec2{source.valueAt(3, 0), source.valueAt(3, 1)});
+    }
+  });
+  // Cells whose 3x3 neighbourhood (clipped to the film) the pilot saw as one value are flat.
+  std::vector<uint8_t> edge(C, 0);
+  uint64_t edges = 0;
+  for (int y = 0; y < Y; ++y)
+    for (int x = 0; x < X; ++x) {
+      const double v = pilot[size_t(y) * X + x];
+      bool flat = true;
+      for (int dy = -1; dy <= 1 && flat; ++dy)
+        for (int dx = -1; dx <= 1 && flat; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx >= 0 && yy >= 0 && xx < X && yy < Y && pilot[size_t(yy) * X + xx] != v) flat = false;
+        }
+      edge[size_t(y) * X + x] = flat ? 0 : 1;
+      edges += flat ? 0 : 1;
+    }
+  const double edgeBudget = kEmissionEdgeBudget * double(C);
+  const uint32_t edgeRays =  // even: two replicates
+      edges == 0 ? kEmissionEdgeRays
+                 : uint32_t(std::clamp(std::floor(edgeBudget / double(edges)), double(kEmissionFlatRays),
+                                       double(kEmissionEdgeRays))) & ~1u;
+
+  // 2. Fresh stratified rays per cell; per-row sums of I_j^ and of its variance estimate, reduced in row order.
+  std::vector<double> rowMean(size_t(Y), 0.0), rowVar(size_t(Y), 0.0);
+  forRows(Y, parallel, [&](int y) {
+    IndependentSource source(0, 0);
+    PathContribution path;
+    double sumMean = 0, sumVar = 0;
+    for (int x = 0; x < X; ++x) {
+      const uint64_t j = uint64_t(y) * uint64_t(X) + uint64_t(x);
+      const uint32_t half = (edge[j] ? edgeRays : kEmissionFlatRays) / 2;
+      double m[2];
+      for (uint64_t r = 0; r < 2; ++r) {  // two independent replicates of `half` stratified rays
+        const uint64_t key = hashKeys(s.seed, kStageKey, j, r);
+        double sum = 0;
+        for (uint32_t k = 0; k < half; ++k) {
+          source.reset(key, k);
+          sum += seen(source, path, x, y, stratifiedPixelPoint(key, k, half));
+        }
+        m[r] = sum / double(half);
+      }
+      sumMean += 0.5 * (m[0] + m[1]);
+      sumVar += 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4 = Var((m_0 + m_1) / 2)
+    }
+    rowMean[size_t(y)] = sumMean;
+    rowVar[size_t(y)] = sumVar;
+  });
+  double total = 0, var = 0;
+  for (int y = 0; y < Y; ++y) {
+    total += rowMean[size_t(y)];
+    var += rowVar[size_t(y)];
+  }
+
+  EmissionEstimate out;
+  out.cellsPerPixelAxis = G;
+  out.edgeCells = edges;
+  out.edgeRays = edgeRays;
+  out.rays = uint64_t(C) + (uint64_t(C) - edges) * kEmissionFlatRays + edges * uint64_t(edgeRays);
+  BootstrapEstimate& e = out.estimate;
+  e.n = out.rays;
+  e.b = total / double(C);
+  e.stdErr = std::sqrt(var) / double(C);
+  e.sampleVar = c1Var;
+  e.tau = std::numeric_limits<double>::infinity();  // no tail split: the whole b_1
+  e.bulkB = e.b;
+  e.bulkStdErr = e.stdErr;
+  e.bulkVar = c1Var;
+  e.excessMeanSq = 0;
+  return out;
+}
+
+}  // namespace mlt

@@ -1,0 +1,61 @@
+// b_1 of a per-length method (mmlt, rjmlt) from camera rays: the emission seen directly.
+//
+// Length 1 is a camera ray that hits a light (or escapes to an environment light). Its chains' target
+// c_1 (target.h: the luminance of the path's contribution, (s, t) chosen at random and MIS-weighted)
+// integrates over the primary samples to
+//     b_1 = E_u[c_1(u)] = (1/P) sum_j I_j,   I_j = lum of the length-1 image in pixel j       (E1)
+// whatever technique renders it. The bootstrap's candidates estimate it with the technique choice and
+// the light-tracing technique (1, 1) in the way, and chains of length 1 get ~3% of the mutations, so
+// their large steps hardly refine it: on the Cornell box at 256x256, b_1 (44% of b) kept 1.1% run-to-run
+// spread at 32 mutations per pixel and ~0.45% at an 8 s job, most of mmlt's brightness error
+// (docs/CHAINS.md).
+//
+// Here (E1) is estimated cell by cell with camera rays (pt limited to one segment: Le at the first hit,
+// no next-event estimation). A cell is a pixel, or a G x G part of one where the film has fewer than
+// kEmissionMinCells pixels (a small film's light would otherwise cover a few cells, all of them outline).
+// Below, "pixel" j means cell j. Two stages:
+//   1. a pilot: one ray per pixel;
+//   2. pixel j gets n_j fresh rays in two independent replicates of n_j / 2 rays, each replicate
+//      stratified over the pixel (stratifiedPixelPoint), and I_j^ is the mean of the replicates' means
+//      m_j0, m_j1: n_j = kEmissionFlatRays where the pilot's 3x3 neighbourhood of j is one value (inside
+//      a light or away from every light), else n_j = kEmissionEdgeRays (a light's outline, a textured
+//      light), fewer if the outlines would take more than kEmissionEdgeBudget rays per pixel of the film.
+// n_j depends on the pilot only and stage 2's rays are independent of it, so E[I_j^] = I_j: unbiased.
+// The variance sits where a light's outline crosses a pixel; there stratified rays leave ~n^-1.5 of one
+// ray's variance instead of n^-1. Var(b_1^) = (1/P^2) sum_j Var(I_j^), each estimated without bias by
+// (m_j0 - m_j1)^2 / 4 (the replicates are i.i.d.; the sample variance of stratified rays would overstate
+// it ~5x on the Cornell box). On the Cornell box at 256x256 this costs
+// ~3 rays per pixel, ~0.1 s of one thread. The chains still render length 1 (their visits follow the
+// brightness, which suits a light's outline better than pixel samples do); only the factor b_1 that
+// scales them comes from here.
+#pragma once
+#include <cstdint>
+
+#include "common/mlt/target_sums.h"
+#include "common/settings/render_settings.h"
+
+namespace mlt {
+
+class RenderScene;
+
+constexpr uint32_t kEmissionFlatRays = 2;   // two replicates of one ray: a pixel the pilot misread shows its variance
+constexpr uint32_t kEmissionEdgeRays = 256;  // even
+constexpr double kEmissionEdgeBudget = 4;   // rays per cell for the outlines, at most
+constexpr uint64_t kEmissionMinCells = uint64_t(1) << 16;
+
+struct EmissionEstimate {
+  BootstrapEstimate estimate;
+  uint64_t rays = 0;            // pilot + stage 2
+  int cellsPerPixelAxis = 1;    // G
+  uint64_t edgeCells = 0;       // cells given the outline's count
+  uint32_t edgeRays = 0;        // rays of each such cell
+};
+
+// (E1) for the scene camera's film, a pure function of (scene, settings.seed,
+// settings.integrator). The estimate is of the whole b_1: no tail split (tau = infinity, so the chains'
+// large steps of length 1 are summed whole too); c1Var is the variance of c_1 per uniform sample (the
+// candidates'), which is what a large step of length 1 has and what combineB weighs the large steps by.
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings, double c1Var,
+                                  bool parallel = true);
+
+}  // namespace mlt
