@@ -31,8 +31,9 @@
 //    for their chain layers renumbered 1 + 2k (the stochastic rounding keys changed with the layer).
 //    pt/lt/bdpt unchanged.
 //  - mmlt and rjmlt where a light is seen directly (cornell-box, glossy-plates, cornell-variety): b_1 from
-//    camera rays (common/job/emission_estimate.h) instead of the candidates of length 1. caustic-mirror
-//    (no light in view: b_1 = 0 either way) and every other method unchanged.
+//    camera rays (common/job/emission_estimate.h) instead of the candidates of length 1, whose count the
+//    bootstrap's budget then no longer grows (BootstrapConfig::seedOnlyLengths). caustic-mirror (no light
+//    in view: b_1 = 0 either way, never grown) and every other method unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -183,7 +184,7 @@ const Case kCases[] = {
     Case{"cornell-box", "bdpt", "3b54b9f78d4a2c8402ebe93375b4779a50b84654ac6960f31ad2e7f46dbd12d7"},
     Case{"cornell-box", "pssmlt", "0ef8bfe0fb2003db1856a2402f1023d9dc02f04da471bd52f0e82563d98bd719"},
     Case{"cornell-box", "pssmlt-bdpt", "d6d428d27e514dd6764bf4b4d28d2eb5d8f8ccc3dabd74c4df1e943b034dddeb"},
-    Case{"cornell-box", "mmlt", "2bc9db6d07b77db05f7fe75d381c9162b8bb0141abdf3763c3f5b2ae3fc40e41"},
+    Case{"cornell-box", "mmlt", "fd6c5b77a3618dc7d599664fb8a8dc7b15219f44f2578132ddc1234529519ac3"},
     Case{"caustic-mirror", "pt", "3723f4618b74a301f9d12494536d2ef877a4b557ab8bf89a74b86cc8865e08e8"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "2e551b84c146d4ee9d8b59508f5c14e52b01e1cac35d3a595a4be731e3c8dc48"},
@@ -195,17 +196,17 @@ const Case kCases[] = {
     Case{"glossy-plates", "bdpt", "5531aed294d6cbed77b813522d03d1930c6077c6397cf5f244101b74d1982dee"},
     Case{"glossy-plates", "pssmlt", "f02efab0622a388d4a0dcb42e692917cc36fd54a6cb42ebdfec5498865e520d1"},
     Case{"glossy-plates", "pssmlt-bdpt", "59fc2f9cebbbd7967088f4eca4452ed5766ab3521e6d003b2299e48213029d72"},
-    Case{"glossy-plates", "mmlt", "c2f9527a7961f17f9360ba06056c5deaa5d7593419657549e276680f0d1f46da"},
+    Case{"glossy-plates", "mmlt", "5d606282073a8e7e395edc6b66c1a83a1c9968cd701bfe5df98637c4962f8cbe"},
     Case{"cornell-variety", "pt", "d4eeb0de6b9ef719c31f3b7fde06055b03d456e53255e8da96d150906a1e9a1e"},
     Case{"cornell-variety", "lt", "f7100b968787a51b00e2ea9d2a121049e63a8d49fdaff9a44f0496e80354e377"},
     Case{"cornell-variety", "bdpt", "7294ed50043f0f0481db77cce1fc57bdbe5c4dc4140222d4a51926840e07ccaf"},
     Case{"cornell-variety", "pssmlt", "65bba77d6d1218ac45b4441985399d4636a07f819647f988533db148bdd34726"},
     Case{"cornell-variety", "pssmlt-bdpt", "ef0666784cf4b52d02f18e72ed0f46122bf1671a902f7e2564676206c66543b9"},
-    Case{"cornell-variety", "mmlt", "735828c650fbe1fc23bf68ee1bd338ae50863700d840073df2bc6dafb1c629ed"},
-    Case{"cornell-box", "rjmlt", "0c67631a873cdb822e0a852ea2cb36ce166c7576ae1b7f0aaa684c2f8eb37505"},
+    Case{"cornell-variety", "mmlt", "dda95fa9293e966231daea659aac3c4317d5047e27e7f7095fe89aa869988fa2"},
+    Case{"cornell-box", "rjmlt", "21d704dfd1ff9ab23635e8cee934e4714c00b2911b6df25f8fe818a90302ef15"},
     Case{"caustic-mirror", "rjmlt", "541791ba0add3e4a5607bc651f1a2304d7458e925ce3178a180d725c7ffeff5e"},
-    Case{"glossy-plates", "rjmlt", "38c25e594e6430937656a87551d120c88e8e51963ad65ce45738af40e19bba99"},
-    Case{"cornell-variety", "rjmlt", "bef385fdac9707128d73dc2e05d919cc9c784dd72d3dba221bf072aa50b3ea01"},
+    Case{"glossy-plates", "rjmlt", "db5ebf1e20b8c02326d24eaca7e6cf93db4a74d5beb2d286d9e7b6901d3ffff7"},
+    Case{"cornell-variety", "rjmlt", "1f03b69f1cb029a80c2642d1c1ae119a84a5fa6666dbf59e70333f94c7ce840e"},
     Case{"cornell-box", "veach-mlt", "bca89b21b537a8599343207e30dee7661be023cf9a9afb39d90ea722d285546a"},
     Case{"caustic-mirror", "veach-mlt", "6783afad6e36a0cfce75d50d680fb42ceb1138219ce4af04a59df57301a8937c"},
     Case{"glossy-plates", "veach-mlt", "6f626af7b83493c32c97034f40f4d029c456b52067795f71d14ead86d9e04497"},

@@ -67,7 +67,8 @@ int chainMinLength(bool separateDirect);
 struct MarkovChainBootstrap {
   // (Plans reuse a bootstrap of the same method only: checkBootstrapFits compares settings.method.)
   RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples resolved)
-  BootstrapResult result;
+  BootstrapResult result;   // result.seconds includes raySeconds
+  double raySeconds = 0;    // of those, b_1's camera rays (emission_estimate.h): a cost that does not grow with the candidates
 };
 
 // Bootstrap sizing. The bootstrap finds start states, allocates chains to path lengths and gives the

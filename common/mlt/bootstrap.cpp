@@ -79,6 +79,10 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     throw std::invalid_argument("bootstrap: too many candidates per path length: " + std::to_string(maxN));
   BootstrapResult result;
   std::vector<double> varMean(config.pathLengths.size(), 0.0);  // variance of each b_k
+  const auto seedOnly = [&](size_t l) {
+    return std::find(config.seedOnlyLengths.begin(), config.seedOnlyLengths.end(), config.pathLengths[l]) !=
+           config.seedOnlyLengths.end();
+  };
   // Evaluates candidates [from, to) of length slot l in parallel (each writes its own slot).
   const auto evaluate = [&](LengthBootstrap& lb, uint64_t from, uint64_t to) {
     lb.c.resize(to);
@@ -130,7 +134,9 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     double spent = bootstrapCost(result.lengths);
     for (;;) {
       size_t best = 0;
-      const auto gain = [&](size_t l) { return varMean[l] / (double(result.lengths[l].c.size()) * cost[l]); };
+      const auto gain = [&](size_t l) {
+        return seedOnly(l) ? 0.0 : varMean[l] / (double(result.lengths[l].c.size()) * cost[l]);
+      };
       for (size_t l = 1; l < result.lengths.size(); ++l)
         if (gain(l) > gain(best)) best = l;
       LengthBootstrap& lb = result.lengths[best];
@@ -147,13 +153,16 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     for (;;) {
       double b = 0, var = 0;
       for (size_t l = 0; l < result.lengths.size(); ++l) {
+        if (seedOnly(l)) continue;
         b += result.lengths[l].estimate.b;
         var += varMean[l];
       }
       if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
       size_t worst = 0;
+      const auto growable = [&](size_t l) { return seedOnly(l) ? 0.0 : varMean[l]; };
       for (size_t l = 1; l < result.lengths.size(); ++l)
-        if (varMean[l] > varMean[worst]) worst = l;
+        if (growable(l) > growable(worst)) worst = l;
+      if (!(growable(worst) > 0)) break;
       if (result.lengths[worst].c.size() >= maxN) break;
       LengthBootstrap& lb = result.lengths[worst];
       const uint64_t n = lb.c.size();

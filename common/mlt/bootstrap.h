@@ -59,6 +59,10 @@ struct BootstrapConfig {
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
   uint64_t firstSlot = 0;                // slot of pathLengths[0] (a later block of lengths continues the slots)
   bool parallel = true;
+  // Lengths whose b the caller estimates otherwise (mmlt's length 1 by camera rays, common/job/
+  // emission_estimate.h): their candidates only seed chains, so the budget (or the target) never grows
+  // them; they keep the first round's count.
+  std::vector<int> seedOnlyLengths;
 };
 
 // The candidates above the tail threshold: about 1 in 1024, at least kCandidateGroups (develop.h (D3)).
