@@ -6,7 +6,9 @@
 //    uniform camera rays;
 //  - far more precise than the candidates at a fraction of their count per unit of error;
 //  - a pure function of (scene, seed): thread count and repetition give the same bits;
-//  - wired into mmlt's and rjmlt's bootstrap (slot 1, no tail split), not into the one-length methods'.
+//  - wired into mmlt's and rjmlt's bootstrap (slot 1, no tail split; length 1's candidates then only seed
+//    chains and are not grown, but a light they all missed still gets some), not into the one-length
+//    methods'.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -162,6 +164,9 @@ TEST(EmissionEstimate, PerLengthMethodsTakeTheirBOneFromIt) {
     ASSERT_FALSE(boot.result.lengths.empty());
     const LengthBootstrap& l1 = boot.result.lengths.front();
     ASSERT_EQ(l1.pathLength, 1) << m;
+    // Length 1's candidates only seed chains: the budget grows the others, never it (seedOnlyLengths).
+    EXPECT_EQ(l1.c.size(), uint64_t(s.bootstrapSamples) / 4) << m;
+    EXPECT_GT(boot.result.candidates, uint64_t(s.bootstrapSamples) * boot.result.lengths.size() / 4) << m;
     const EmissionEstimate e = emissionEstimate(cornell(), s, l1.estimate.sampleVar);
     EXPECT_EQ(l1.estimate, e.estimate) << m;
     double b = 0;

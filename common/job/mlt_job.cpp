@@ -228,9 +228,9 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   if (bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
     // A budget of the cost of N mutations per length (bootstrap.h, chainMixCost: a candidate of a long
     // path costs more than one of a short path, and the chains dwell on bright paths, often short). A
-    // quarter per length to start with, then the budget goes where b's variance is per unit of cost
-    // (mmlt's length 1, a small light seen directly, needs far more than the others); one length doubles
-    // while it fits.
+    // quarter per length to start with, then the budget goes where b's variance is per unit of cost; one
+    // length doubles while it fits. (mmlt's length 1, a small light seen directly, took most of it until
+    // b_1 came from camera rays; now its candidates keep the first round's count.)
     bc.totalCandidates = bc.candidatesPerLength * lengths.size();
     bc.candidatesPerLength /= 4;
   }
