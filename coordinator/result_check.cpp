@@ -33,6 +33,31 @@ void checkBuffer(const std::vector<RGBd>& values, const std::string& field, int 
                                   i % size_t(width), i / size_t(width), v, kQuantumExp));
 }
 
+// b's strata (develop.h (D6), film layer bStrataLayer(slot) = 2 + 2 slot): per pixel a whole count of
+// large steps, a sum of m = min(c, tau) >= 0 and of m^2 >= 0, and one count per large step of the slot
+// (ChainStats::largeStepSums). A layer that disagrees with the large steps would be set aside by refinedB
+// without a word; here it is refused, naming the layer.
+void checkStrata(const PartialResult& r, int width) {
+  for (uint32_t l : r.film.splatLayers()) {
+    if (l < 2 || l % 2 != 0) continue;
+    const size_t slot = (l - 2) / 2;
+    const std::string field = fmt::format("partial.splat_layers[{}]", l);
+    const std::vector<RGBd>& layer = r.film.splatLayer(l);
+    double n = 0;  // whole numbers below 2^53: exact
+    for (size_t i = 0; i < layer.size(); ++i) {
+      const RGBd& v = layer[i];
+      if (!(v.r >= 0 && v.r == std::floor(v.r) && v.g >= 0 && v.b >= 0))
+        refuse(field, fmt::format("pixel ({}, {}) holds ({}, {}, {}): b's strata hold a whole count of large steps and "
+                                  "sums of m >= 0 and m^2 >= 0", i % size_t(width), i / size_t(width), v.r, v.g, v.b));
+      n += v.r;
+    }
+    const uint64_t large = slot < r.stats.largeStepSums.size() ? r.stats.largeStepSums[slot].n : 0;
+    if (n != double(large))
+      refuse(field, fmt::format("b's strata of path length slot {} count {} large steps, but "
+                                "partial.stats.large_step_sums[{}].n is {}", slot, n, slot, large));
+  }
+}
+
 }  // namespace
 
 uint32_t maxSplatLayer(const JobPlan& plan) {
@@ -70,6 +95,7 @@ void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const 
                                                  i / size_t(w), counts[i], pixelSamples));
   checkBuffer(r.film.pixelSums(), "partial.pixel_sums", w);
   for (uint32_t l : r.film.splatLayers()) checkBuffer(r.film.splatLayer(l), fmt::format("partial.splat_layers[{}]", l), w);
+  checkStrata(r, w);
 }
 
 }  // namespace mlt::farm

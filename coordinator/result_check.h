@@ -1,7 +1,8 @@
 // What an uploaded task result must be before the coordinator counts it: a film the task can hold. Checked
 // from the plan alone: the job's film size, the task's units, the sample count its units make, splat
-// layers the method can fill, and every value finite and on the job's quantization grid (multiples of
-// 2^-kQuantumExp, common/mlt/develop.h: what every method's units write). A film that passes may still be
+// layers the method can fill, every value finite and on the job's quantization grid (multiples of
+// 2^-kQuantumExp, common/mlt/develop.h: what every method's units write), and b's strata layers (whole
+// counts, one per large step of their slot). A film that passes may still be
 // wrong (only rendering the units again would tell), but one of NaN, infinities, 1e300 counts, the wrong
 // size or the wrong sample count never reaches the image.
 #pragma once
