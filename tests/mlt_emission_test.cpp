@@ -129,6 +129,7 @@ TEST(EmissionEstimate, UnbiasedWithTheStatedStandardError) {
 
 TEST(EmissionEstimate, SpendsItsRaysOnTheLightsOutline) {
   const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", 3), 0.0);
+  ASSERT_TRUE(e.estimated);
   // A 48 x 36 film has fewer than kEmissionMinCells pixels: 7 x 7 cells per pixel (6 x 6 would be fewer).
   ASSERT_EQ(e.cellsPerPixelAxis, 7);
   const uint64_t C = uint64_t(kW) * kH * 49;
@@ -184,6 +185,36 @@ TEST(EmissionEstimate, PerLengthMethodsTakeTheirBOneFromIt) {
   const MarkovChainBootstrap boot = bootstrapMarkovChainJob(*pss, cornell(), settings("pssmlt-bdpt", 6));
   ASSERT_EQ(boot.result.lengths.size(), 1u);
   EXPECT_EQ(boot.result.lengths[0].estimate.n, boot.result.lengths[0].c.size());
+}
+
+// A light a few pixels wide and very bright is what camera rays sample worst: glossy-plates' smallest sphere
+// (~1 pixel, radiance 1111, a quarter of b_1) makes one cell of the pilot hold kEmissionMaxCellShare of its
+// emission or more (or, missed by the pilot, leaves the big ones' cells at ~1/1000 each, but then the
+// medium spheres' hold more), so mmlt keeps the candidates' b_1 there; the Cornell box's uniform light
+// holds ~1/300 per cell, so it takes the rays'.
+TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
+  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/glossy-plates.xml");
+  desc.camera.width = desc.camera.height = 64;
+  const std::unique_ptr<RenderScene> plates = RenderScene::build(desc);
+  const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
+  ASSERT_TRUE(mmlt);
+  for (uint64_t seed : {2, 3, 4}) {
+    RenderSettings s = settings("mmlt", seed);
+    s.width = s.height = 64;
+    const EmissionEstimate rays = emissionEstimate(*plates, s, 0.0);
+    EXPECT_GE(rays.maxCellShare, kEmissionMaxCellShare) << seed;
+    EXPECT_FALSE(rays.estimated) << seed << ": the pilot alone runs";
+    EXPECT_EQ(rays.rays, uint64_t(64 * 64) * uint64_t(rays.cellsPerPixelAxis * rays.cellsPerPixelAxis)) << seed;
+    const MarkovChainBootstrap boot = bootstrapMarkovChainJob(*mmlt, *plates, s);
+    const LengthBootstrap& l1 = boot.result.lengths.front();
+    ASSERT_EQ(l1.pathLength, 1);
+    EXPECT_EQ(l1.estimate.n, l1.c.size()) << "b_1 is the candidates'";
+    EXPECT_LT(l1.estimate.tau, std::numeric_limits<double>::infinity());
+    EXPECT_GT(boot.raySeconds, 0);
+  }
+  const EmissionEstimate box = emissionEstimate(cornell(), settings("mmlt", 2), 0.0);
+  EXPECT_GT(box.maxCellShare, 0);
+  EXPECT_LT(box.maxCellShare, kEmissionMaxCellShare);
 }
 
 // The bundled Cornell box at 32 x 32 (seed 7, 4000 candidates, depth 4: the farm tests' job): its light,

@@ -79,6 +79,20 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
       pilot[j] = seen(source, path, x, y, Vec2{source.valueAt(3, 0), source.valueAt(3, 1)});
     }
   });
+  uint64_t lit = 0;
+  double pilotSum = 0, pilotMax = 0;  // in index order: deterministic
+  for (double v : pilot) {
+    lit += v > 0 ? 1 : 0;
+    pilotSum += v;
+    pilotMax = std::max(pilotMax, v);
+  }
+  EmissionEstimate out;
+  out.cellsPerPixelAxis = G;
+  out.litCells = lit;
+  out.maxCellShare = pilotSum > 0 ? pilotMax / pilotSum : 0.0;
+  out.rays = uint64_t(C);
+  if (!(out.maxCellShare > 0 && out.maxCellShare < kEmissionMaxCellShare)) return out;  // not estimated
+  out.estimated = true;
   // Cells whose 3x3 neighbourhood (clipped to the film) the pilot saw as one value are flat.
   std::vector<uint8_t> edge(C, 0);
   uint64_t edges = 0;
@@ -131,8 +145,6 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
     var += rowVar[size_t(y)];
   }
 
-  EmissionEstimate out;
-  out.cellsPerPixelAxis = G;
   out.edgeCells = edges;
   out.edgeRays = edgeRays;
   out.rays = uint64_t(C) + (uint64_t(C) - edges) * kEmissionFlatRays + edges * uint64_t(edgeRays);

@@ -249,17 +249,25 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       return c;
     };
   };
-  // mmlt and rjmlt take b_1 from camera rays (below): length 1's candidates only seed its chains.
-  const bool raysForLengthOne = spec.chainsPerLength() && lengths.front() == 1;
+  // mmlt and rjmlt take b_1 from camera rays (emission_estimate.h, (E1)) unless a light seen directly is a
+  // few very bright pixels (kEmissionMaxCellShare of the pilot): then length 1's candidates only seed its
+  // chains.
+  const bool lengthOne = spec.chainsPerLength() && lengths.front() == 1;
+  std::optional<EmissionEstimate> e1;
+  double raySeconds = 0;
+  if (lengthOne) {
+    const auto t0 = std::chrono::steady_clock::now();
+    e1 = emissionEstimate(scene, s, 0.0);
+    raySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  const bool raysForLengthOne = e1 && e1->estimated;
   if (raysForLengthOne) bc.seedOnlyLengths = {1};
   out.result = runBinnedBootstrap(bc, candidates);
-  if (raysForLengthOne) {
-    // b_1 from camera rays (emission_estimate.h, (E1)); the candidates still seed the chains of length 1.
+  if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
     LengthBootstrap& l1 = out.result.lengths.front();
     const BootstrapEstimate counted = l1.estimate;  // what out.result.b and bStdErr hold for length 1
-    EmissionEstimate e1 = emissionEstimate(scene, s, 0.0);
-    if (e1.estimate.b > 0 && !(l1.estimate.b > 0)) {
+    if (e1->litCells > 0 && !(l1.estimate.b > 0)) {
       // The rays see a light that every candidate of length 1 missed (a thin light on a small film): without
       // a candidate that carries light there is no chain of length 1 and the light would be missing from
       // the image. More candidates, 4x at a time, until one carries light.
@@ -274,23 +282,37 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
         l1 = std::move(r.lengths.front());
       }
       if (!(l1.estimate.b > 0))
-        spdlog::warn("{}: camera rays see a light (b_1 = {:.3g}) that {} candidates of length 1 missed: no chain "
-                     "renders it, and the image lacks it (raise --bootstrap)", spec.name(), e1.estimate.b, l1.c.size());
+        spdlog::warn("{}: camera rays see a light ({} lit cells of their pilot) that {} candidates of length 1 "
+                     "missed: no chain renders it, and the image lacks it (raise --bootstrap)", spec.name(),
+                     e1->litCells, l1.c.size());
     }
-    e1.estimate.sampleVar = e1.estimate.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
-                 "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
-                 spec.name(), e1.estimate.b, e1.estimate.stdErr, e1.rays, e1.cellsPerPixelAxis, e1.cellsPerPixelAxis,
-                 e1.edgeCells, e1.edgeRays, seconds,
-                 l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
-    out.result.b += e1.estimate.b - counted.b;
-    out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
-                                                     counted.stdErr * counted.stdErr +
-                                                     e1.estimate.stdErr * e1.estimate.stdErr));
-    l1.estimate = e1.estimate;
+    const double seconds = raySeconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.result.seconds += seconds;
     out.raySeconds = seconds;
+    if (!raysForLengthOne) {
+      spdlog::info("{}: b_1 from the candidates: {} ({:.3f} s)", spec.name(),
+                   e1->litCells == 0 ? std::string("the camera rays' pilot saw no light")
+                                     : fmt::format("one cell of the camera rays' pilot holds {:.2g} of its emission, "
+                                                   "a light a few pixels wide that rays sample badly", e1->maxCellShare),
+                   seconds);
+      if (!(l1.estimate.b == counted.b && l1.estimate.stdErr == counted.stdErr)) {  // candidates drawn again
+        out.result.b += l1.estimate.b - counted.b;
+        out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
+                                                         counted.stdErr * counted.stdErr +
+                                                         l1.estimate.stdErr * l1.estimate.stdErr));
+      }
+    } else {
+      BootstrapEstimate e = e1->estimate;
+      e.sampleVar = e.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
+      spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
+                   "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
+                   spec.name(), e.b, e.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis, e1->edgeCells,
+                   e1->edgeRays, seconds, l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
+      out.result.b += e.b - counted.b;
+      out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
+                                                       counted.stdErr * counted.stdErr + e.stdErr * e.stdErr));
+      l1.estimate = e;
+    }
   }
   if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
