@@ -51,6 +51,18 @@ RenderSettings settings(const char* method, uint64_t seed) {
   return s;
 }
 
+// scenes/<name>.xml on a res x res film, and mmlt's settings for it.
+std::unique_ptr<RenderScene> bundledScene(const std::string& name, int res) {
+  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + name + ".xml");
+  desc.camera.width = desc.camera.height = res;
+  return RenderScene::build(desc);
+}
+RenderSettings squareSettings(uint64_t seed, int res) {
+  RenderSettings s = settings("mmlt", seed);
+  s.width = s.height = res;
+  return s;
+}
+
 struct Mean {
   double mean = 0, stdErr = 0;
 };
@@ -193,14 +205,11 @@ TEST(EmissionEstimate, PerLengthMethodsTakeTheirBOneFromIt) {
 // medium spheres' hold more), so mmlt keeps the candidates' b_1 there; the Cornell box's uniform light
 // holds ~1/300 per cell, so it takes the rays'.
 TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
-  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/glossy-plates.xml");
-  desc.camera.width = desc.camera.height = 64;
-  const std::unique_ptr<RenderScene> plates = RenderScene::build(desc);
+  const std::unique_ptr<RenderScene> plates = bundledScene("glossy-plates", 64);
   const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
   ASSERT_TRUE(mmlt);
   for (uint64_t seed : {2, 3, 4}) {
-    RenderSettings s = settings("mmlt", seed);
-    s.width = s.height = 64;
+    const RenderSettings s = squareSettings(seed, 64);
     const EmissionEstimate rays = emissionEstimate(*plates, s, 0.0);
     EXPECT_GE(rays.maxCellShare, kEmissionMaxCellShare) << seed;
     EXPECT_FALSE(rays.estimated) << seed << ": the pilot alone runs";
@@ -221,13 +230,10 @@ TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
 // thin on the film, escaped all 1000 candidates of length 1 of the first round, so no chain rendered it.
 // The rays see it, and the bootstrap draws more candidates until one carries light.
 TEST(EmissionEstimate, ALightTheCandidatesMissedStillGetsChains) {
-  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml");
-  desc.camera.width = desc.camera.height = 32;
-  const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
+  const std::unique_ptr<RenderScene> scene = bundledScene("cornell-box", 32);
   const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
   ASSERT_TRUE(mmlt);
-  RenderSettings s = settings("mmlt", 7);
-  s.width = s.height = 32;
+  RenderSettings s = squareSettings(7, 32);
   s.bootstrapSamples = 4000;
   s.mutationsPerPixel = 8;
   const MarkovChainBootstrap boot = bootstrapMarkovChainJob(*mmlt, *scene, s);
