@@ -37,10 +37,10 @@ void checkBuffer(const std::vector<RGBd>& values, const std::string& field, int 
 // large steps, a sum of m = min(c, tau) >= 0 and of m^2 >= 0, and one count per large step of the slot
 // (ChainStats::largeStepSums). A layer that disagrees with the large steps would be set aside by refinedB
 // without a word; here it is refused, naming the layer.
-void checkStrata(const PartialResult& r, int width) {
-  for (uint32_t l : r.film.splatLayers()) {
-    if (l < 2 || l % 2 != 0) continue;
-    const size_t slot = (l - 2) / 2;
+void checkStrata(const PartialResult& r, int width, uint32_t maxLayer) {
+  for (size_t slot = 0; bStrataLayer(slot) <= maxLayer; ++slot) {
+    const size_t l = bStrataLayer(slot);
+    if (!r.film.hasSplatLayer(l)) continue;
     const std::string field = fmt::format("partial.splat_layers[{}]", l);
     const std::vector<RGBd>& layer = r.film.splatLayer(l);
     double n = 0;  // whole numbers below 2^53: exact
@@ -95,7 +95,7 @@ void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const 
                                                  i / size_t(w), counts[i], pixelSamples));
   checkBuffer(r.film.pixelSums(), "partial.pixel_sums", w);
   for (uint32_t l : r.film.splatLayers()) checkBuffer(r.film.splatLayer(l), fmt::format("partial.splat_layers[{}]", l), w);
-  checkStrata(r, w);
+  checkStrata(r, w, maxLayer);
 }
 
 }  // namespace mlt::farm

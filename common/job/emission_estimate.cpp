@@ -30,9 +30,7 @@ double emissionSeen(const PathEvaluator& pt, IndependentSource& source, PathCont
   path.clear();
   const Vec2 pixel{float(x), float(y)};
   pt.evaluate(source, &pixel, path);
-  Color L;
-  for (const Splat& sp : path.splats) L += sp.L;
-  const double v = luminance(L);
+  const double v = luminance(path.total());
   if (!(std::isfinite(v) && v >= 0))
     throw std::runtime_error("emission estimate: the ray through pixel (" + std::to_string(x) + ", " +
                              std::to_string(y) + ") sees invalid emission " + std::to_string(v));

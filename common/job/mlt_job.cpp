@@ -288,31 +288,28 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     }
     const double seconds = raySeconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.result.seconds += seconds;
-    out.raySeconds = seconds;
-    if (!raysForLengthOne) {
+    out.raySeconds = raySeconds;  // the candidates drawn again above are candidates' time
+    BootstrapEstimate final = l1.estimate;
+    if (raysForLengthOne) {
+      final = e1->estimate;
+      final.sampleVar = final.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
+      spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
+                   "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
+                   spec.name(), final.b, final.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis,
+                   e1->edgeCells, e1->edgeRays, seconds, l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
+    } else {
       spdlog::info("{}: b_1 from the candidates: {} ({:.3f} s)", spec.name(),
                    e1->litCells == 0 ? std::string("the camera rays' pilot saw no light")
                                      : fmt::format("one cell of the camera rays' pilot holds {:.2g} of its emission, "
                                                    "a light a few pixels wide that rays sample badly", e1->maxCellShare),
                    seconds);
-      if (!(l1.estimate.b == counted.b && l1.estimate.stdErr == counted.stdErr)) {  // candidates drawn again
-        out.result.b += l1.estimate.b - counted.b;
-        out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
-                                                         counted.stdErr * counted.stdErr +
-                                                         l1.estimate.stdErr * l1.estimate.stdErr));
-      }
-    } else {
-      BootstrapEstimate e = e1->estimate;
-      e.sampleVar = e.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
-      spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
-                   "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
-                   spec.name(), e.b, e.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis, e1->edgeCells,
-                   e1->edgeRays, seconds, l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
-      out.result.b += e.b - counted.b;
-      out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
-                                                       counted.stdErr * counted.stdErr + e.stdErr * e.stdErr));
-      l1.estimate = e;
     }
+    if (!(final.b == counted.b && final.stdErr == counted.stdErr)) {  // out.result's sums hold `counted`
+      out.result.b += final.b - counted.b;
+      out.result.bStdErr = std::sqrt(std::max(0.0, out.result.bStdErr * out.result.bStdErr -
+                                                       counted.stdErr * counted.stdErr + final.stdErr * final.stdErr));
+    }
+    l1.estimate = final;
   }
   if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
