@@ -101,6 +101,25 @@ TEST(RefinedB, BulkWeighsByTheBootstrapsModelAndReportsTheLargerError) {
   EXPECT_EQ(combineB(unsplit(1000, 1.0, 0.0, 1.0), large).b, 1.0);  // an exact bootstrap wins
 }
 
+// Without a tail threshold (tau = infinity: mmlt's b_1 from camera rays) the large steps' sum and bulk are
+// the same numbers, rounded independently by quantizeSums: a difference of one quantum must neither add an
+// excess nor make the stated standard error infinite (the covariance term is excess * (tau - m)). Seen with
+// a target whose values are not floats: the EXR said bStdErr = inf.
+TEST(RefinedB, NoThresholdNoExcessWhateverTheRounding) {
+  const BootstrapEstimate boot = unsplit(1000, 2.0, 0.1, 40.0);
+  TargetSums large;
+  large.n = 4000;
+  large.bulk = 4000 * 2.3;
+  large.sum = large.bulk + 0x1p-30;  // rounded up where the bulk was rounded down
+  large.sumSq = large.bulkSq = 4000 * (2.3 * 2.3 + 20.0);
+  TargetSums same = large;
+  same.sum = same.bulk;
+  const BEstimate e = combineB(boot, large), exact = combineB(boot, same);
+  EXPECT_TRUE(std::isfinite(e.stdErr)) << e.stdErr;
+  EXPECT_EQ(e.stdErr, exact.stdErr);
+  EXPECT_EQ(e.b, exact.b);
+}
+
 TEST(RefinedB, ExcessAboveTheTailThresholdIsPooledByCount) {
   // The same bulk as above, plus an excess: 1000 bootstrap candidates with a mean excess 0.5, 4000 large
   // steps with 0.1. The excess's estimate is the pooled mean (1000 * 0.5 + 4000 * 0.1) / 5000 = 0.18,

@@ -106,7 +106,11 @@ inline BEstimate combineB(const BootstrapEstimate& boot, const TargetSums& large
   };
   const double varBulk = w0 * w0 * v0 + (1 - w0) * (1 - w0) * (strata ? vL : std::max(vL, spreadL()));
   // The excess: the pooled mean of every sample's max(c - tau, 0), and its i.i.d. variance.
-  const double excessSum = n0 * (boot.b - boot.bulkB) + (large.sum - large.bulk);
+  // Without a threshold (tau = infinity: b_1 from camera rays) there is no excess: sum and bulk are the same
+  // numbers, differing only by their independent rounding (quantizeSums), which must not make the
+  // covariance below infinity * 0.
+  const bool split = std::isfinite(boot.tau);
+  const double excessSum = split ? n0 * (boot.b - boot.bulkB) + (large.sum - large.bulk) : 0.0;
   const double excess = std::max(0.0, excessSum / n);
   const double excessSq = n0 * boot.excessMeanSq + large.excessSq;
   const double varExcess = std::max(0.0, (excessSq - n * excess * excess) / (n - 1)) / n;
