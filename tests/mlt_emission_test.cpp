@@ -106,7 +106,7 @@ TEST(EmissionEstimate, EstimatesWhatTheChainsTargetOfLengthOneIntegratesTo) {
     target->evaluate(source, 1, path);
     return targetFunction(path);
   });
-  const EmissionEstimate e = emissionEstimate(cornell(), s, 0.0);
+  const EmissionEstimate e = emissionEstimate(cornell(), s);
   ASSERT_GT(e.estimate.b, 0);
   const double tol = 4 * std::hypot(c1.stdErr, e.estimate.stdErr);
   EXPECT_NEAR(e.estimate.b, c1.mean, tol) << "c_1's mean " << c1.mean << " +- " << c1.stdErr;
@@ -118,7 +118,7 @@ TEST(EmissionEstimate, UnbiasedWithTheStatedStandardError) {
   constexpr int kSeeds = 40;
   double sum = 0, sumSq = 0, stated = 0;
   for (int seed = 1; seed <= kSeeds; ++seed) {
-    const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", uint64_t(seed)), 0.0);
+    const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", uint64_t(seed)));
     sum += e.estimate.b;
     sumSq += e.estimate.b * e.estimate.b;
     stated += e.estimate.stdErr * e.estimate.stdErr;
@@ -134,13 +134,13 @@ TEST(EmissionEstimate, UnbiasedWithTheStatedStandardError) {
   EXPECT_GT(statedSe, 0.67 * spread) << "spread " << spread << " stated " << statedSe;
   EXPECT_LT(statedSe, 1.4 * spread) << "spread " << spread << " stated " << statedSe;
   // And it is precise: the same number of plain rays would spread several times more.
-  const EmissionEstimate one = emissionEstimate(cornell(), settings("mmlt", 1), 0.0);
+  const EmissionEstimate one = emissionEstimate(cornell(), settings("mmlt", 1));
   const Mean plainSameRays = plainEmission(one.rays, 9);
   EXPECT_LT(4 * spread, plainSameRays.stdErr) << "rays " << one.rays;
 }
 
 TEST(EmissionEstimate, SpendsItsRaysOnTheLightsOutline) {
-  const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", 3), 0.0);
+  const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", 3));
   ASSERT_TRUE(e.estimated);
   // A 48 x 36 film has fewer than kEmissionMinCells pixels: 7 x 7 cells per pixel (6 x 6 would be fewer).
   ASSERT_EQ(e.cellsPerPixelAxis, 7);
@@ -155,17 +155,18 @@ TEST(EmissionEstimate, SpendsItsRaysOnTheLightsOutline) {
   // No tail split; c_1's variance per uniform sample is the caller's.
   EXPECT_EQ(e.estimate.tau, std::numeric_limits<double>::infinity());
   EXPECT_EQ(e.estimate.bulkB, e.estimate.b);
-  EXPECT_EQ(emissionEstimate(cornell(), settings("mmlt", 3), 2.5).estimate.bulkVar, 2.5);
+  EXPECT_EQ(e.estimate.sampleVar, 0.0);
+  EXPECT_EQ(e.estimate.bulkVar, 0.0);
 }
 
 TEST(EmissionEstimate, SameSeedSameBitsForAnyThreadCount) {
   const RenderSettings s = settings("mmlt", 4);
-  const EmissionEstimate a = emissionEstimate(cornell(), s, 1.0, true);
-  const EmissionEstimate b = emissionEstimate(cornell(), s, 1.0, false);
+  const EmissionEstimate a = emissionEstimate(cornell(), s, true);
+  const EmissionEstimate b = emissionEstimate(cornell(), s, false);
   EXPECT_EQ(std::memcmp(&a.estimate.b, &b.estimate.b, sizeof(double)), 0);
   EXPECT_EQ(std::memcmp(&a.estimate.stdErr, &b.estimate.stdErr, sizeof(double)), 0);
   EXPECT_EQ(a.rays, b.rays);
-  EXPECT_NE(emissionEstimate(cornell(), settings("mmlt", 5), 1.0).estimate.b, a.estimate.b);
+  EXPECT_NE(emissionEstimate(cornell(), settings("mmlt", 5)).estimate.b, a.estimate.b);
 }
 
 TEST(EmissionEstimate, PerLengthMethodsTakeTheirBOneFromIt) {
@@ -180,7 +181,8 @@ TEST(EmissionEstimate, PerLengthMethodsTakeTheirBOneFromIt) {
     // Length 1's candidates only seed chains: the budget grows the others, never it (seedOnlyLengths).
     EXPECT_EQ(l1.c.size(), uint64_t(s.bootstrapSamples) / 4) << m;
     EXPECT_GT(boot.result.candidates, uint64_t(s.bootstrapSamples) * boot.result.lengths.size() / 4) << m;
-    const EmissionEstimate e = emissionEstimate(cornell(), s, l1.estimate.sampleVar);
+    EmissionEstimate e = emissionEstimate(cornell(), s);
+    e.estimate.sampleVar = e.estimate.bulkVar = l1.estimate.sampleVar;  // as the bootstrap sets it
     EXPECT_EQ(l1.estimate, e.estimate) << m;
     double b = 0;
     for (const LengthBootstrap& lb : boot.result.lengths) b += lb.estimate.b;
@@ -210,7 +212,7 @@ TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
   ASSERT_TRUE(mmlt);
   for (uint64_t seed : {2, 3, 4}) {
     const RenderSettings s = squareSettings(seed, 64);
-    const EmissionEstimate rays = emissionEstimate(*plates, s, 0.0);
+    const EmissionEstimate rays = emissionEstimate(*plates, s);
     EXPECT_GE(rays.maxCellShare, kEmissionMaxCellShare) << seed;
     EXPECT_FALSE(rays.estimated) << seed << ": the pilot alone runs";
     EXPECT_EQ(rays.rays, uint64_t(64 * 64) * uint64_t(rays.cellsPerPixelAxis * rays.cellsPerPixelAxis)) << seed;
@@ -221,7 +223,7 @@ TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
     EXPECT_LT(l1.estimate.tau, std::numeric_limits<double>::infinity());
     EXPECT_GT(boot.raySeconds, 0);
   }
-  const EmissionEstimate box = emissionEstimate(cornell(), settings("mmlt", 2), 0.0);
+  const EmissionEstimate box = emissionEstimate(cornell(), settings("mmlt", 2));
   EXPECT_GT(box.maxCellShare, 0);
   EXPECT_LT(box.maxCellShare, kEmissionMaxCellShare);
 }

@@ -48,7 +48,7 @@ void forRows(int height, bool parallel, const Body& body) {
 
 }  // namespace
 
-EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, double c1Var, bool parallel) {
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, bool parallel) {
   const int W = scene.camera().width(), H = scene.camera().height();  // the film
   if (W <= 0 || H <= 0) throw std::invalid_argument("emission estimate: empty film");
   IntegratorSettings oneSegment = s.integrator;
@@ -150,11 +150,11 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
   e.n = out.rays;
   e.b = total / double(C);
   e.stdErr = std::sqrt(var) / double(C);
-  e.sampleVar = c1Var;
+  e.sampleVar = 0;  // set by the caller (see the header)
   e.tau = std::numeric_limits<double>::infinity();  // no tail split: the whole b_1
   e.bulkB = e.b;
   e.bulkStdErr = e.stdErr;
-  e.bulkVar = c1Var;
+  e.bulkVar = 0;
   e.excessMeanSq = 0;
   return out;
 }

@@ -67,9 +67,9 @@ struct EmissionEstimate {
 // (E1) for the scene camera's film, or only the pilot where it says the rays would sample b_1 badly
 // (estimated = false: maxCellShare is 0 or at least kEmissionMaxCellShare). A pure function of (scene, settings.seed,
 // settings.integrator). The estimate is of the whole b_1: no tail split (tau = infinity, so the chains'
-// large steps of length 1 are summed whole too); c1Var is the variance of c_1 per uniform sample (the
-// candidates'), which is what a large step of length 1 has and what combineB weighs the large steps by.
-EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings, double c1Var,
-                                  bool parallel = true);
+// large steps of length 1 are summed whole too). Its sampleVar and bulkVar are left 0 for the caller: the
+// variance of c_1 per uniform sample (the candidates', which run after this pilot decided whether they
+// only seed chains) is what a large step of length 1 has and what combineB weighs the large steps by.
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings, bool parallel = true);
 
 }  // namespace mlt

@@ -257,7 +257,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   double raySeconds = 0;
   if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
-    e1 = emissionEstimate(scene, s, 0.0);
+    e1 = emissionEstimate(scene, s);
     raySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   const bool raysForLengthOne = e1 && e1->estimated;
