@@ -130,7 +130,10 @@ class DevTools:
 # What the test reads from the job page: the DOM's state badge, the preview's dataset and a digest of the
 # preview's pixels (drawn on a canvas).
 PAGE_STATE = r"""(async () => {
-  if (!document.getElementById("state")) return null;  // not loaded yet
+  // Not loaded yet until every element read below exists (the page's DOM can be caught half-built: "state"
+  // there but not "b", which made this script throw instead of waiting).
+  for (const id of ["state", "b", "cancel", "fetch-png", "error"])
+    if (!document.getElementById(id)) return null;
   const img = document.getElementById("preview");
   let digest = null;
   if (img && img.complete && img.naturalWidth > 0) {
