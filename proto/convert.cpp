@@ -387,8 +387,8 @@ std::string encodeFilm(const Film& film) {
   return out;
 }
 
-Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
-                const std::vector<uint32_t>& layers) {
+namespace {
+void checkFilmShape(int width, int height, const std::vector<uint32_t>& layers) {
   if (width <= 0 || height <= 0 || width > kMaxFilmSide || height > kMaxFilmSide)
     throw WireError("partial.width", fmt::format("film {}x{} out of range", width, height));
   if (layers.empty() || layers[0] != 0) throw WireError("partial.splat_layers", "must start with layer 0");
@@ -396,11 +396,25 @@ Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFin
     if (layers[i] <= layers[i - 1] || layers[i] > kMaxSplatLayer)
       throw WireError("partial.splat_layers", fmt::format("layers must ascend and be at most {}, got {} after {}",
                                                           kMaxSplatLayer, layers[i], layers[i - 1]));
+}
+}  // namespace
+
+Film zeroFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers) {
+  checkFilmShape(width, height, layers);
+  Film film(width, height);
+  for (uint32_t l : layers) film.splatLayer(l);
+  film.setNonFiniteSamples(nonFinite);
+  return film;
+}
+
+Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
+                const std::vector<uint32_t>& layers) {
+  checkFilmShape(width, height, layers);
   const size_t expected = filmByteSize(width, height, layers.size());
   if (bytes.size() != expected)
     throw WireError("film_chunk", fmt::format("film {}x{} with {} splat layers needs {} bytes, got {}", width, height,
                                               layers.size(), expected, bytes.size()));
-  Film film(width, height);
+  Film film = zeroFilm(width, height, nonFinite, layers);
   const size_t n = film.pixelCount();
   const char* src = bytes.data();
   std::memcpy(film.pixelSums().data(), src, n * sizeof(RGBd));
@@ -411,7 +425,6 @@ Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFin
     std::memcpy(film.splatLayer(l).data(), src, n * sizeof(RGBd));
     src += n * sizeof(RGBd);
   }
-  film.setNonFiniteSamples(nonFinite);
   return film;
 }
 

@@ -65,6 +65,8 @@ v1::PartialHeader partialHeader(const PartialResult& r);
 // little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
 inline constexpr uint32_t kMaxSplatLayer = 2050;  // mlt/develop.h maxChainFilmLayer(1025): max depth <= 1024
 std::string encodeFilm(const Film& film);
+// A zero film of that size with those splat layers, checked as decodeFilm checks them (WireError).
+Film zeroFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers);
 Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
                 const std::vector<uint32_t>& layers = {0});
 size_t filmByteSize(int width, int height, size_t splatLayers = 1);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "common/mlt/alias_table.h"
@@ -165,6 +166,45 @@ TEST(Develop, QuantizationIsUnbiased) {
   const double q = std::ldexp(1.0, -kQuantumExp);
   const double se = q * std::sqrt(0.3 * 0.7 / n);
   EXPECT_NEAR(sum / n, v, 4 * se);
+}
+
+// onQuantumGrid (read from the bits) against its definition, through ldexp and floor: the values that
+// quantizeFilm makes, their neighbours one ulp away, both sides of every exponent where the test changes,
+// zeros, subnormals, infinities, NaN and random bit patterns.
+TEST(Develop, OnQuantumGridMatchesItsDefinition) {
+  auto reference = [](double v) {
+    if (!std::isfinite(v)) return false;
+    const double scaled = std::ldexp(v, kQuantumExp);
+    return std::isfinite(scaled) && scaled == std::floor(scaled);
+  };
+  std::vector<double> values = {0.0, -0.0, std::numeric_limits<double>::infinity(),
+                                -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(),
+                                std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::max(),
+                                std::numeric_limits<double>::min(), 0.1, 1.0 / 3.0};
+  for (int e = -60; e <= 60; ++e)
+    for (double m : {1.0, 1.5, 1.0 + 0x1p-52, 1.0 + 0x1p-26, 1.0 + 0x1p-25, 2.0 - 0x1p-52, 1.75})
+      for (double sign : {1.0, -1.0}) {
+        const double v = sign * std::ldexp(m, e);
+        values.insert(values.end(), {v, std::nextafter(v, 0.0), std::nextafter(v, 1e300)});
+      }
+  Pcg32 rng(3, 7);
+  int onGrid = 0;
+  for (int i = 0; i < 200000; ++i) {
+    Film f(1, 1);
+    f.splatSums()[0].r = std::ldexp(rng.uniform(), int(rng.uniform() * 80) - 40);
+    quantizeFilm(f, 11, uint64_t(i));
+    values.push_back(f.splatSums()[0].r);
+    const uint64_t bits = (uint64_t(rng.nextU32()) << 32) | rng.nextU32();
+    double v;
+    std::memcpy(&v, &bits, sizeof v);
+    values.push_back(v);
+  }
+  for (double v : values) {
+    ASSERT_EQ(onQuantumGrid(v), reference(v)) << std::hexfloat << v;
+    onGrid += reference(v) ? 1 : 0;
+  }
+  EXPECT_GT(onGrid, 200000);  // every quantized value: both outcomes well represented
+  EXPECT_GT(int(values.size()) - onGrid, 50000);
 }
 
 }  // namespace

@@ -81,6 +81,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "common/film/film.h"
@@ -100,6 +101,24 @@ inline size_t chainLayer(size_t slot) { return 2 * slot + 1; }
 inline size_t bStrataLayer(size_t slot) { return 2 * slot + 2; }
 // The largest film layer a job with `slots` path length slots fills.
 inline size_t maxChainFilmLayer(size_t slots) { return bStrataLayer(slots == 0 ? 0 : slots - 1); }
+
+// Whether v is finite and a multiple of 2^-kQuantumExp (what quantizeFilm makes of every sum), read from
+// its bits: v = 1.f x 2^e has significand bits of weight 2^(e-52+j), j = 0..52 (52 the implicit one), and
+// is on the grid iff every bit of weight below 2^-kQuantumExp, j < 52 - kQuantumExp - e, is zero. Exact,
+// and without libm (the coordinator checks every value of every uploaded film with it).
+inline bool onQuantumGrid(double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits &= ~(uint64_t(1) << 63);
+  if (bits == 0) return true;
+  const int biased = int(bits >> 52);
+  if (biased == 0x7ff || biased == 0) return false;  // inf or NaN; subnormal (nonzero, below 2^-1022)
+  if (biased - 1023 + kQuantumExp > 1023) return false;  // v x 2^kQuantumExp is not finite
+  const int below = 52 - kQuantumExp - (biased - 1023);  // significand bits below the grid
+  if (below <= 0) return true;
+  if (below > 52) return false;  // even the implicit bit is below the grid
+  return (bits & ((uint64_t(1) << below) - 1)) == 0;
+}
 
 // Rounds the sums of one work unit to multiples of 2^-kQuantumExp, as quantizeFilm does for films, so that
 // they merge exactly in any grouping.
