@@ -178,16 +178,29 @@ TEST(FarmLayer, TasksAreBoundedByTheirFilmTraffic) {
   const JobPlan tiny = chainPlan(32, 32, 96, 8 * 1024 / 96);
   expectContiguous(splitTasks(tiny), 96);
   EXPECT_EQ(splitTasks(tiny).size(), 64u);
-  // The README's default job: 256x256, 1024 chains, 256 mutations per pixel. 64 tasks would move 64 films
-  // of 3.7 MB; the traffic bound allows max(64 MiB, 4 B x 16.8 M mutations) = 67 MB, i.e. 18 films.
-  const JobPlan def = chainPlan(256, 256, 1024, 256 * 256 * 256 / 1024);
+  // The README's default job: 256x256, 1024 chains, 256 mutations per pixel. With one splat layer (a
+  // film of 3.7 MB) the traffic bound, max(64 MiB, 4 B x 16.8 M mutations) = 67 MB, allows 18 films.
+  JobPlan def = chainPlan(256, 256, 1024, 256 * 256 * 256 / 1024);
   expectContiguous(splitTasks(def), 1024);
+  EXPECT_EQ(findMethod("mmlt").filmLayers(def), 1u);
   EXPECT_EQ(splitTasks(def).size(), 18u);
+  // But mmlt's films hold a chain layer and a strata layer per path length (5 lengths: 11 layers,
+  // 19 MB): 3 such films fit, and the floor gives kMinTasks.
+  def.norm.mutationsPerLength = {0, 1, 1, 1, 1, 1};
+  EXPECT_EQ(findMethod("mmlt").filmLayers(def), 11u);
+  EXPECT_EQ(splitTasks(def).size(), kMinTasks);
+  // A sampling method's film has one layer whatever the plan says.
+  EXPECT_EQ(findMethod("bdpt").filmLayers(def), 1u);
   // Four times the work: four times the films (still at most 64).
   const JobPlan longer = chainPlan(256, 256, 1024, 4 * 256 * 256 * 256 / 1024);
   EXPECT_EQ(splitTasks(longer).size(), 64u);
-  // Never fewer than min(units, 4), whatever the film.
+  // Little work on a large film: kMinTasks while 512 MiB holds that many films (1280x720: 10 of 52 MB),
+  // fewer where it does not (1920x1080: 4 of 116 MB), but never fewer than min(units, 4).
+  EXPECT_EQ(splitTasks(chainPlan(1280, 720, 100, 10)).size(), kMinTasks);
   EXPECT_EQ(splitTasks(chainPlan(1920, 1080, 100, 10)).size(), 4u);
+  JobPlan hd = chainPlan(1280, 720, 100, 10);
+  hd.norm.mutationsPerLength = {0, 1, 1, 1, 1, 1};  // 273 MB films
+  EXPECT_EQ(splitTasks(hd).size(), 4u);
   EXPECT_EQ(splitTasks(chainPlan(1920, 1080, 3, 10)).size(), 3u);
 }
 

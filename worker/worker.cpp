@@ -12,6 +12,7 @@
 #include <random>
 
 #include "common/farm/tasks.h"
+#include "common/job/executor.h"
 
 namespace fs = std::filesystem;
 
@@ -159,10 +160,12 @@ void Worker::runTask(Active* a) {
     PartialResult result;
     // Up to every thread on this task's units, inside the worker's one arena of `threads` slots: the tasks
     // in hand share the threads unit by unit (never more runnable threads than cores), and the job's last
-    // task does not leave the other threads idle.
+    // task does not leave the other threads idle (with as many units in flight as the in-process
+    // renderer: executor.h unitsInFlight).
     bool complete = false;
     arena_->execute([&] {
-      complete = farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel, size_t(opt_.threads));
+      complete = farm::runTask(*scene, *plan, {l.unitBegin, l.unitEnd}, result, &a->cancel,
+                               unitsInFlight(size_t(opt_.threads)));
     });
     if (!complete) {
       spdlog::info("worker={} job={} task={} event=abandoned", workerId, l.jobId, l.taskIndex);

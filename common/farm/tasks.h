@@ -25,12 +25,15 @@ uint64_t rawFilmBytes(int width, int height, size_t splatLayers = 1);
 // A unit's work: its mutations (Markov chains) or pixel samples (pt, lt, bdpt).
 uint64_t unitWork(const JobPlan& plan, const WorkUnit& u);
 
-// The tasks of a plan. Many tasks balance many workers, make previews fine-grained and a lost task
-// cheap; but every task carries a whole film (megabytes at 256x256: encoded, sent, stored, summed), so
-// their number is bounded by what the films may cost next to the work:
-//   T = min(units, 64, 512 MiB / film, max(4, max(64 MiB, 4 bytes x work) / film))
-// with film = the raw bytes of a film with one splat layer. A small film (the tests' 32x32) keeps 64
-// tasks; the README's default job (256x256, 16.8 M mutations) gets 18 tasks instead of 64.
+// The tasks of a plan. Many tasks balance many workers, make progress and previews fine-grained and a
+// lost task cheap; but every task carries a whole film (megabytes at 256x256: encoded, sent, stored,
+// summed), so their number is bounded by what the films may cost next to the work:
+//   T = min(units, 64, max(4, 512 MiB / film), max(kMinTasks, max(64 MiB, 4 bytes x work) / film))
+// with film = the raw bytes of the plan's film, every splat layer it holds (RenderMethod::filmLayers). A
+// small film (the tests' 32x32) keeps 64 tasks; the README's default job (256x256, 16.8 M mutations, mmlt
+// films of 11 layers, 19 MB) gets kMinTasks: at least that many steps of progress, and tasks for a few
+// workers to share.
+inline constexpr uint64_t kMinTasks = 8;
 std::vector<TaskRange> splitTasks(const JobPlan& plan);
 
 // Runs units [range.begin, range.end), up to `parallelism` at a time, summing them in index order into a

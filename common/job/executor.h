@@ -23,6 +23,11 @@ struct UnitExecution {
   std::function<void(size_t, PartialResult&)> merge;  // called in index order
 };
 
+// Units in flight for `threads` threads. Merging strictly in index order holds a finished unit's token
+// until every unit before it is merged: with one token per thread, a long unit (a long chain, a deep
+// path length) leaves the other threads idle behind it. Two per thread keep them busy.
+inline size_t unitsInFlight(size_t threads) { return 2 * (threads > 0 ? threads : 1); }
+
 // Returns the number of units merged (= issued).
 size_t executeUnits(const UnitExecution& e);
 

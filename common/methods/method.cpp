@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/mlt/develop.h"
+
 namespace mlt {
 
 namespace {
@@ -80,6 +82,10 @@ void RenderMethod::checkParams(const MethodParams& given) const {
 uint64_t RenderMethod::unitWork(const JobPlan& plan, const WorkUnit& unit) const {
   if (family() == MethodFamily::MarkovChain) return unit.mutations;
   return uint64_t(unit.sampleEnd - unit.sampleBegin) * uint64_t(plan.settings.width) * uint64_t(plan.settings.height);
+}
+
+size_t RenderMethod::filmLayers(const JobPlan& plan) const {
+  return family() == MethodFamily::MarkovChain ? chainFilmLayers(plan.norm.mutationsPerLength) : 1;
 }
 
 std::string RenderMethod::paramText(const RenderSettings& s, const std::string& key) const {

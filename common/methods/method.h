@@ -69,6 +69,9 @@ class RenderMethod {
   virtual void addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& metadata) const = 0;
   // The work a unit of the plan holds, in the family's measure (samples or mutations): progress, ETA.
   virtual uint64_t unitWork(const JobPlan& plan, const WorkUnit& unit) const;
+  // The splat layers a film of the plan holds (layer 0 included): what a task's film costs to move and
+  // sum (farm/tasks.h splitTasks). The default: the chain layout of develop.h for Markov chains, else 1.
+  virtual size_t filmLayers(const JobPlan& plan) const;
 
   // Throws std::invalid_argument unless every entry names one of params() and holds a valid value.
   void checkParams(const MethodParams& params) const;

@@ -101,6 +101,13 @@ inline size_t chainLayer(size_t slot) { return 2 * slot + 1; }
 inline size_t bStrataLayer(size_t slot) { return 2 * slot + 2; }
 // The largest film layer a job with `slots` path length slots fills.
 inline size_t maxChainFilmLayer(size_t slots) { return bStrataLayer(slots == 0 ? 0 : slots - 1); }
+// The splat layers a chain job's films hold: layer 0 (light-traced splats of a direct pass) and, per path
+// length slot that has mutations, its chain layer and its strata layer.
+inline size_t chainFilmLayers(const std::vector<uint64_t>& mutationsPerSlot) {
+  size_t layers = 1;
+  for (uint64_t m : mutationsPerSlot) layers += m > 0 ? 2 : 0;
+  return layers;
+}
 
 // Whether v is finite and a multiple of 2^-kQuantumExp (what quantizeFilm makes of every sum), read from
 // its bits: v = 1.f x 2^e has significand bits of weight 2^(e-52+j), j = 0..52 (52 the implicit one), and

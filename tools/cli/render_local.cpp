@@ -143,7 +143,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
                                          std::chrono::duration<double>(std::min(kTrialShare * budget, kTrialMaxSeconds)));
   uint64_t trialMutations = 0;
   runPipeline(
-      size_t(2 * threads),
+      unitsInFlight(size_t(threads)),
       [&](size_t i) { return i < size_t(threads) || Clock::now() < trialEnd; },
       [&](size_t i) { return runWorkUnit(scene, trialPlan, trialUnits[spreadIndex(i, trialUnits.size())]); },
       [&](size_t, const PartialResult& r) { trialMutations += r.samples; });
@@ -270,7 +270,7 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   }
   const auto runStart = Clock::now();
   runPipeline(
-      techniques ? 1 : size_t(2 * threads),  // technique films are shared: one unit at a time
+      techniques ? 1 : unitsInFlight(size_t(threads)),  // technique films are shared: one unit at a time
       [&](size_t i) { return i < nUnits && !(stopAtDeadline && Clock::now() >= deadline); },
       [&](size_t i) {
         if (techniques) return runSampleUnit(*techniqueEvaluator, plan, plan.units[i], techniques.get());

@@ -28,7 +28,7 @@ JobRun runJobInProcess(const RenderScene& scene, const RenderSettings& settings,
   run.unitSamples.reserve(nUnits);
   // The one executor (common/job/executor.h): the sums do not depend on the thread count.
   UnitExecution e;
-  e.parallelism = size_t(2 * nThreads);
+  e.parallelism = unitsInFlight(size_t(nThreads));
   e.issue = [&](size_t i) { return i < nUnits; };
   e.run = [&](size_t i) { return runWorkUnit(scene, plan, plan.units[i]); };
   e.merge = [&](size_t, PartialResult& r) {
