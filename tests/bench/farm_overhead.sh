@@ -61,6 +61,11 @@ echo "farm / in-process wall: $(ratio 1)"
 # (a shared host) moves both sides of a pair alike, so the median of these ratios is the steadier figure.
 pairs=$(paste -d' ' "$TMP/in-process.times" "$TMP/farm.times" | awk '{print $4 / $1}' | sort -g)
 echo "farm / in-process wall, run by run: $(echo $pairs | tr ' ' '\n' | awk '{printf "%.3f ", $1}')(median $(echo "$pairs" | awk '{v[NR]=$1} END {printf "%.3f", (NR%2 ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2)}'))"
+# A distribution-free 95% interval for the median pair ratio: order statistics k and n + 1 - k, with k the
+# largest such that P(Binomial(n, 1/2) < k) <= 0.025 (the sign test). Needs n >= 6.
+echo "$pairs" | awk '{v[NR]=$1} END {n=NR; if (n < 6) exit; p=0.5^n; c=0; k=0
+  for (i=0; i<n; i++) { c+=p; if (c > 0.025) break; k=i+1; p=p*(n-i)/(i+1) }
+  if (k >= 1) printf "median pair ratio, 95%% interval (sign test, order statistics %d and %d of %d): %.3f to %.3f\n", k, n+1-k, n, v[k], v[n+1-k]}'
 cpu() { awk '{s = $2 + $3; print s}' "$1" | sort -g | head -1; }
 echo "farm / in-process CPU (user+sys, best): $(awk -v a="$(cpu "$TMP/in-process.times")" -v b="$(cpu "$TMP/farm.times")" 'BEGIN {printf "%.3f (%.2f s vs %.2f s)", b / a, b, a}')"
 echo "machine after: $(uptime | sed 's/.*load average/load average/')"
