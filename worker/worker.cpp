@@ -286,9 +286,19 @@ void Worker::reapFinished() {
 }
 
 int Worker::run() {
-  // Units may use TBB inside; never more threads than we were given.
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(opt_.threads));
-  arena_ = std::make_unique<tbb::task_arena>(opt_.threads);
+  // A task's units run inside arena_, whose `threads` slots bound the threads at work. TBB counts one
+  // external thread in this limit, so threads + 1 lets it give the arena `threads` worker threads for the
+  // slots that task threads leave (an arena without reserved slots asks for that many, below; with a
+  // limit of `threads` TBB warns on stderr that it ignores the request). Outside the arena, the one TBB
+  // user is a scene's first build (Embree), once per scene per worker, which may use threads + 1.
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(opt_.threads) + 1);
+  // No slot reserved for external threads. The tasks' threads are external to TBB, and TBB's worker may
+  // only take an unreserved slot. With the default (one of the two slots reserved), a task thread that
+  // had taken the unreserved slot kept TBB's worker out for as long as it stayed: when it was the job's
+  // last task, it ran its units on one core while the other idled (per-thread perf of the README's job:
+  // 2.2 s of one thread alone; some runs used 1.7-1.9 of 2 cores). With every slot open, TBB's worker
+  // takes whichever slot a task thread leaves.
+  arena_ = std::make_unique<tbb::task_arena>(opt_.threads, 0);
   if (opt_.spoolMaxBytes > 0) spool_ = std::make_unique<FilmSpool>(opt_.spoolDir, opt_.spoolMaxBytes);
   std::thread spooler;
   if (spool_) spooler = std::thread([this] { spoolLoop(); });
