@@ -44,16 +44,7 @@ class ToyMethod final : public RenderMethod {
     return {level};
   }
   JobPlan plan(const RenderScene&, const RenderSettings& settings) const override {
-    JobPlan p;
-    p.settings = settings;
-    for (uint32_t i = 0; i < kToyUnits; ++i) {
-      WorkUnit u;
-      u.index = i;
-      u.sampleBegin = i;
-      u.sampleEnd = i + 1;
-      p.units.push_back(u);
-    }
-    return p;
+    return farm::test::sampleUnitsPlan(settings, kToyUnits);
   }
   PartialResult runUnit(const RenderScene&, const JobPlan& plan, const WorkUnit& unit) const override {
     PartialResult r;

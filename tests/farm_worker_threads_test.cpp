@@ -10,21 +10,15 @@
 // locked TBB's worker out only when the last task's thread had taken the unreserved slot, which depends
 // on when the tasks before it leave; a per-thread perf profile of the README's job showed it.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
-#include <filesystem>
 #include <memory>
 #include <thread>
 
-#include "common/farm/tasks.h"
 #include "common/methods/registry.h"
-#include "coordinator/client.h"
-#include "coordinator/coordinator.h"
-#include "coordinator/service.h"
 #include "tests/farm/farm_harness.h"
-#include "worker/worker.h"
+#include "tests/farm/in_process_farm.h"
 
 namespace mlt {
 namespace {
@@ -42,16 +36,7 @@ class RendezvousMethod final : public RenderMethod {
   std::string description() const override { return "its last two units wait for each other (tests only)"; }
   MethodFamily family() const override { return MethodFamily::Samples; }
   JobPlan plan(const RenderScene&, const RenderSettings& settings) const override {
-    JobPlan p;
-    p.settings = settings;
-    for (uint32_t i = 0; i < kUnits; ++i) {
-      WorkUnit u;
-      u.index = i;
-      u.sampleBegin = i;
-      u.sampleEnd = i + 1;
-      p.units.push_back(u);
-    }
-    return p;
+    return farm::test::sampleUnitsPlan(settings, kUnits);
   }
   PartialResult runUnit(const RenderScene&, const JobPlan& plan, const WorkUnit& unit) const override {
     if (unit.index >= kUnits - 2) {
@@ -81,41 +66,15 @@ TEST(WorkerThreads, TheLastTaskRunsItsUnitsOnEveryThread) {
     return true;
   }();
   (void)registered;
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("mltfarm-threads-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-
-  farm::CoordinatorOptions co;
-  co.stateDir = (dir / "state").string();
-  co.leaseWaitSeconds = 0.2;
-  farm::Coordinator coordinator(co);
-  farm::ServerOptions so;
-  so.listen = "127.0.0.1:0";
-  farm::RunningServer server = farm::startServer(so, coordinator, coordinator);
-  const farm::ChannelOptions channel{"127.0.0.1:" + std::to_string(server.port), "", ""};
-
   farm::WorkerOptions wo;
-  wo.coordinator = channel;
   wo.threads = 2;
-  wo.cacheDir = (dir / "cache").string();
-  farm::Worker worker(wo);
-  std::thread workerThread([&] { worker.run(); });
-  struct Stop {  // whatever happens below, the worker thread is stopped and joined
-    farm::Worker& w;
-    std::thread& t;
-    ~Stop() {
-      w.stop();
-      if (t.joinable()) t.join();
-    }
-  } stopWorker{worker, workerThread};
-
+  farm::test::InProcessFarm farm(1, wo);
   wire::SubmittedSettings s;
   s.settings.method = "rendezvous";
   s.settings.width = 8;
   s.settings.height = 8;
   s.hasSize = true;
-  farm::FarmClient client(channel);
+  farm::FarmClient client(farm.channel());
   for (int job = 0; job < kJobs; ++job) {
     gStarted = 0;
     gMet = 0;
@@ -128,11 +87,6 @@ TEST(WorkerThreads, TheLastTaskRunsItsUnitsOnEveryThread) {
     ASSERT_EQ(gMet.load(), 2) << "job " << job << ": the last task's two units never ran at the same time: the "
                               << "worker ran the task on one thread while the other was free";
   }
-  worker.stop();
-  workerThread.join();
-  coordinator.stop();
-  server.server->Shutdown();
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 
 #include "common/farm/scene_loading.h"
 #include "common/core/durable_file.h"
+#include "common/job/job_types.h"
 #include "coordinator/client.h"
 #include "coordinator/process.h"
 
@@ -25,6 +26,21 @@ namespace fs = std::filesystem;
 
 inline std::string toolsDir() { return MLTFARM_TOOLS_DIR; }
 inline std::string cornellBox() { return std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml"; }
+
+// A toy method's plan (tests that register a method): `units` work units of one sample per pixel each,
+// unit i taking sample i.
+inline JobPlan sampleUnitsPlan(const RenderSettings& settings, uint32_t units) {
+  JobPlan p;
+  p.settings = settings;
+  for (uint32_t i = 0; i < units; ++i) {
+    WorkUnit u;
+    u.index = i;
+    u.sampleBegin = i;
+    u.sampleEnd = i + 1;
+    p.units.push_back(u);
+  }
+  return p;
+}
 
 inline std::string readFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
