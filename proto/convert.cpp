@@ -397,14 +397,19 @@ void checkFilmShape(int width, int height, const std::vector<uint32_t>& layers) 
       throw WireError("partial.splat_layers", fmt::format("layers must ascend and be at most {}, got {} after {}",
                                                           kMaxSplatLayer, layers[i], layers[i - 1]));
 }
-}  // namespace
 
-Film zeroFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers) {
-  checkFilmShape(width, height, layers);
+// A zero film with those layers, its shape already checked.
+Film allocateFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers) {
   Film film(width, height);
   for (uint32_t l : layers) film.splatLayer(l);
   film.setNonFiniteSamples(nonFinite);
   return film;
+}
+}  // namespace
+
+Film zeroFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers) {
+  checkFilmShape(width, height, layers);
+  return allocateFilm(width, height, nonFinite, layers);
 }
 
 Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFinite,
@@ -414,7 +419,7 @@ Film decodeFilm(int width, int height, const std::string& bytes, uint64_t nonFin
   if (bytes.size() != expected)
     throw WireError("film_chunk", fmt::format("film {}x{} with {} splat layers needs {} bytes, got {}", width, height,
                                               layers.size(), expected, bytes.size()));
-  Film film = zeroFilm(width, height, nonFinite, layers);
+  Film film = allocateFilm(width, height, nonFinite, layers);
   const size_t n = film.pixelCount();
   const char* src = bytes.data();
   std::memcpy(film.pixelSums().data(), src, n * sizeof(RGBd));
