@@ -58,12 +58,19 @@ RTCRayHit toRtc(const Ray& ray) {
   return rh;
 }
 
+constexpr const char* kDeviceConfig = "max_isa=avx2";
+
 }  // namespace
 
 Accel::Accel(const std::vector<MeshDesc>& meshes) : impl_(std::make_unique<Impl>()) {
   Impl& I = *impl_;
   I.meshes = meshes;
-  I.device = rtcNewDevice(nullptr);
+  // Embree picks its kernels by the CPU's instruction set at run time, and its AVX-512 kernels return
+  // other bits for the same ray than its AVX2 ones (the golden digests, recorded on an AVX-512 machine,
+  // all differed on an AVX2 one). A chain must give the same bytes on every worker of a farm, whatever
+  // its CPU, so the kernels are capped at AVX2: every x86-64 CPU since 2013-2015 runs exactly these.
+  // (An older CPU without AVX2 gets Embree's SSE/AVX kernels, and other bits.)
+  I.device = rtcNewDevice(kDeviceConfig);
   if (!I.device)
     throw std::runtime_error("Embree: cannot create device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
   rtcSetDeviceErrorFunction(I.device, Impl::errorCallback, &I);
