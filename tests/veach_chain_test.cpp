@@ -85,6 +85,7 @@ double compare(const char* name, const RenderScene& scene, int maxDepth, const M
   s.integrator.maxDepth = maxDepth;
   s.mutationsPerPixel = mpp;
   s.chains = 8;  // long chains (~2-3k mutations): a wrong acceptance ratio shows before the start states wash it out
+  s.params["veach-light-view"] = std::to_string(mut.lightView);  // the plan's bootstrap and the chains agree
   const test::ImageStats st = test::veachStats(scene, s, mut, kRuns, kTiles, 4000, &acc);
   int where = 0;
   const double z = test::maxZ(st, ref, &where);
@@ -121,6 +122,7 @@ test::ImageStats wrongStats(const RenderScene& scene, int maxDepth, double mpp) 
     s.integrator.maxDepth = maxDepth;
     s.mutationsPerPixel = mpp;
     s.chains = 8;
+    s.params["veach-light-view"] = "0";  // the chains carry every path (this space has them all)
     const JobPlan plan = veach::planVeachJob(scene, s);
     const veach::PathSpace space(scene, maxDepth);
     Film film(kSize, kSize);
@@ -171,6 +173,9 @@ TEST(VeachChain, GlassAndMirrorSpheres) {
   const test::ImageStats ref = bdptStats(*scene, 5, 512);
   EXPECT_LT(compare("glass + mirror, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 96, ref), kZ);
   EXPECT_LT(compare("glass + mirror, all", *scene, 5, MutationSettings{}, 96, ref), kZ);
+  MutationSettings chainsOnly;  // no light-view pass: the chains carry the light seen directly and through glass
+  chainsOnly.lightView = 0;
+  EXPECT_LT(compare("glass + mirror, all, light views in the chains", *scene, 5, chainsOnly, 96, ref), kZ);
 }
 
 TEST(VeachChain, MirrorWall) {

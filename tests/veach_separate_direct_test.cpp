@@ -59,9 +59,12 @@ std::vector<Color> render(const RenderScene& scene, const RenderSettings& s, Job
 
 // The plan is pssmlt-bdpt's with separateDirect: the same b (direct paths left out of every candidate's
 // c), the same chains and start candidates, then the direct pass's bdpt batches.
+// (Without the light-view pass, whose paths pssmlt-bdpt's target keeps.)
 TEST(VeachSeparateDirect, PlanLeavesTheDirectPathsToTheDirectPass) {
   const RenderScene& scene = specularBox();
-  const JobPlan sd = planJob(scene, settings(true));
+  RenderSettings noViews = settings(true);
+  noViews.params["veach-light-view"] = "0";
+  const JobPlan sd = planJob(scene, noViews);
   const JobPlan all = planJob(scene, settings(false));
   RenderSettings p = settings(true);
   p.method = "pssmlt-bdpt";

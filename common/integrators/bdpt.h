@@ -97,6 +97,16 @@ int generateCameraSubpath(const RenderScene& scene, SampleSource& source, const 
 // Light subpath: path[0] is the light vertex. Returns the vertex count (<= maxVertices).
 int generateLightSubpath(const RenderScene& scene, SampleSource& source, int maxVertices, int rrDepth, Vertex* path);
 
+// Whether the camera subpath prefix camera[0..t-1] (t >= 2) is a light seen from the lens through Dirac
+// scattering only, E S* L, the light's own view (directly, in mirrors, through glass): as the strategy
+// s = 0 it is then the only strategy that can make the path (every other one would connect at a Dirac
+// vertex), so its MIS weight is 1. veach-mlt leaves these paths to a pass of their own (light_view.h).
+inline bool isLightView(const Vertex* camera, int t) {
+  if (t < 2 || !camera[t - 1].isLight()) return false;
+  for (int i = 1; i <= t - 2; ++i)
+    if (!camera[i].delta) return false;
+  return true;
+}
 // Unweighted contribution of strategy (s, t): f(x) / p_{s,t}(x) of the path made of light[0..s-1] and
 // camera[t-1..0], visibility included. Resampled endpoints (s=1: a light point from the Connect stream;
 // t=1: a lens point from Camera[2,3]) are written to *sampled. t=1 sets *pRaster. Zero if not connectible.

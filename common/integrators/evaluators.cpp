@@ -35,6 +35,7 @@ void BdptEvaluator::evaluate(SampleSource& source, const Vec2* pixel, PathContri
     for (int s = 0; s <= nLight; ++s) {
       const int segments = s + t - 1;
       if ((s == 1 && t == 1) || segments < 1 || (maxDepth >= 0 && segments > maxDepth)) continue;
+      if (s == 0 && dropLightViews_ && isLightView(camera, t)) continue;
       Vertex sampled;
       Vec2 pRaster = out.cameraRaster;
       const Color C = connectBdpt(scene_, source, light, s, camera, t, &sampled, &pRaster);

@@ -23,12 +23,15 @@ std::unique_ptr<PathEvaluator> makeEvaluator(const RenderScene& scene, const std
 
 class BdptEvaluator final : public PathEvaluator {
  public:
-  BdptEvaluator(const RenderScene& scene, const IntegratorSettings& settings) : scene_(scene), settings_(settings) {}
+  // dropLightViews: leave out the paths E S* L (isLightView, bdpt.h; veach-mlt renders them apart).
+  BdptEvaluator(const RenderScene& scene, const IntegratorSettings& settings, bool dropLightViews = false)
+      : scene_(scene), settings_(settings), dropLightViews_(dropLightViews) {}
   void evaluate(SampleSource& source, const Vec2* pixel, PathContribution& out) const override;
 
  private:
   const RenderScene& scene_;
   IntegratorSettings settings_;
+  bool dropLightViews_;
 };
 
 class LightTracer final : public PathEvaluator {

@@ -520,12 +520,24 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
 }
 
 std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged) {
+  if (merged.film.pixelCount() == 0) return developMarkovChainImage(plan, merged, {});  // zeros, or the error
+  return developMarkovChainImage(plan, merged, markovChainLayerScales(plan, merged));
+}
+
+std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged,
+                                           const std::vector<double>& scales) {
   const RenderSettings& s = plan.settings;
   const size_t P = size_t(s.width) * size_t(s.height);
   if (merged.film.pixelCount() == 0) {
     if (plan.units.empty()) return std::vector<Color>(P);  // b = 0: nothing carries light
     throw std::invalid_argument("developImage: no work units merged");
   }
+  return merged.film.develop(scales);
+}
+
+std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialResult& merged) {
+  const RenderSettings& s = plan.settings;
+  const size_t P = size_t(s.width) * size_t(s.height);
   // Layer 0: the direct pass's t = 1 splats, P / N with N the light paths of the direct units merged.
   uint64_t directLightPaths = 0;
   for (uint32_t i : merged.units)
@@ -540,7 +552,7 @@ std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialRes
   for (size_t slot = 0; slot < M.size() && chainLayer(slot) < scales.size(); ++slot)
     if (M[slot] > 0 && slot < refined.perSlot.size())
       scales[chainLayer(slot)] = chainSplatScale(refined.perSlot[slot].b, M[slot], P);
-  return merged.film.develop(scales);
+  return scales;
 }
 
 }  // namespace mlt

@@ -167,5 +167,10 @@ PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const
 PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Normalization of the merged chains (b * P / M per length; see mlt/develop.h).
 std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged);
+// The splat layers' scales of that image (one per layer of merged.film; 0 for layers it does not develop),
+// and the image with scales a method completed (veach-mlt's light-view layer).
+std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialResult& merged);
+std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged,
+                                           const std::vector<double>& scales);
 
 }  // namespace mlt

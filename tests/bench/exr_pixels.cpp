@@ -5,6 +5,7 @@
 // Used by tests/bench/farm_overhead.sh to check that the farm and --in-process rendered the same image.
 // Given one file, it also prints the image's mean r, g, b and luminance and every numeric metadata value
 // (b, bStdErr, bBootstrap, ...): how a brightness question is answered without a Python EXR module.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -63,6 +64,19 @@ int main(int argc, char** argv) {
       if (!same && a.rgb.size() == r.rgb.size() && !a.rgb.empty()) {
         // The evaluation harness's metrics, B taken as the reference.
         const mlt::eval::ImageMetrics m = mlt::eval::computeMetrics(a.rgb, r.rgb, 0.01);
+        // Where the error is: the three pixels holding the most of it.
+        const std::vector<float> e = mlt::eval::relativeErrorMap(a.rgb, r.rgb, 0.01);
+        std::vector<size_t> order(e.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+        const size_t top = std::min<size_t>(3, order.size());
+        std::partial_sort(order.begin(), order.begin() + top, order.end(), [&](size_t x, size_t y) { return e[x] > e[y]; });
+        double total = 0;
+        for (double v : e) total += v;
+        for (size_t j = 0; j < top; ++j) {
+          const size_t i = order[j];
+          std::printf("pixel (%zu, %zu): %.1f%% of the error, luminance %.4g against %.4g\n", i % size_t(a.width),
+                      i / size_t(a.width), total > 0 ? 100 * e[i] / total : 0.0, mlt::luminance(a.rgb[i]), mlt::luminance(r.rgb[i]));
+        }
         std::printf("relMSE %.6g brightness %+.4f%%\n", m.relMSE, 100 * m.meanErr);
       }
       return same ? 0 : 1;

@@ -54,7 +54,7 @@ ImageStats veachStats(const RenderScene& scene, RenderSettings s, const veach::M
     PartialResult merged;
     for (const PartialResult& p : parts) merged.add(p);
     all.add(merged.stats);
-    values.push_back(tileMeans(veach::developVeachImage(plan, merged), s.width, s.height, tiles));
+    values.push_back(tileMeans(veach::developVeachImage(plan, merged, mut), s.width, s.height, tiles));
   }
   if (acceptance) *acceptance = veach::acceptanceSummary(all);
   return statsOverRuns(values, tiles);

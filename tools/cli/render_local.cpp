@@ -20,6 +20,7 @@
 #include "common/integrators/evaluators.h"
 #include "common/io/png_io.h"
 #include "common/methods/pss_method.h"
+#include "common/methods/registry.h"
 #include "common/job/sample_job.h"
 #include "common/methods/chain_report.h"
 #include "common/render/render_scene.h"
@@ -120,7 +121,9 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     trialUnits.push_back(u);
     trialUnits.back().mutations = std::min(u.mutations, kTrialUnitMutations);
   }
-  if (trialUnits.empty()) return trialPlan;  // b = 0: no chains to run, whatever the budget
+  // b = 0: no chains to run, whatever the budget. The method's own plan decides what that job is (veach-mlt
+  // plans again without its light-view pass, which its chains carry: veach_job.h).
+  if (trialUnits.empty()) return findMethod(s.method).plan(scene, s);
 
   // The direct pass (separateDirect) takes its share of the budget first: one of its units, timed. Sized
   // by the plan (spp 0: directSppFor), it grows with the mutations per pixel, so its time per mutation per

@@ -39,6 +39,9 @@ struct MutationSettings {
   double r2 = 0;            // 0: 5% of sqrt(film pixels)
   double theta1 = 1e-4;     // caustic perturbation: angle in radians, exponential in [theta1, theta2]
   double theta2 = 0.1;
+  // Not a mutation: the light-view pass (light_view.h), in samples per pixel per mutation per pixel
+  // (0: off, the chains carry the paths E S* L).
+  double lightView = 0.25;
 };
 
 class Mutation {

@@ -97,8 +97,11 @@ double lightChainToCanonical(const Path& x, int r0, int r1) {
   return etendueFactor(x, r0, r1);
 }
 
-PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges)
-    : scene_(scene), maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth), minEdges_(std::max(minEdges, 1)) {
+PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges, bool withoutLightViews)
+    : scene_(scene),
+      maxEdges_(maxDepth < 0 ? kUnlimitedEdges : maxDepth),
+      minEdges_(std::max(minEdges, 1)),
+      withoutLightViews_(withoutLightViews) {
   for (size_t i = 0; i < scene.lights().size(); ++i) {
     const Light& l = *scene.lights()[i];
     const char* type = l.deltaDirection() ? "a directional light"
@@ -110,9 +113,16 @@ PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges)
   }
 }
 
+bool PathSpace::isLightView(const Path& x) {
+  for (int i = 1; i < x.k(); ++i)
+    if (!x.v[i].specular) return false;
+  return true;
+}
+
 Color PathSpace::f(const Path& x, Vec2* pRaster) const {
   const int k = x.k();
   if (k < minEdges_ || k > maxEdges_) return {};
+  if (withoutLightViews_ && isLightView(x)) return {};
   const auto& v = x.v;
   if (v[0].kind != VertexKind::Light || !v[0].light || v[k].kind != VertexKind::Camera) return {};
   for (int i = 1; i < k; ++i)

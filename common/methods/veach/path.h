@@ -91,14 +91,20 @@ class PathSpace {
   // maxDepth: at most this many edges (-1: kUnlimitedEdges); minEdges: at least this many (separateDirect:
   // kDirectMaxSegments + 1, the shorter paths are the direct pass's; f is zero on them). Throws for
   // unsupported lights.
-  PathSpace(const RenderScene& scene, int maxDepth, int minEdges = 1);
+  // withoutLightViews: f is also zero on the paths E S* L (every vertex between the light and the lens
+  // specular: the light seen directly or through mirrors and glass), which the light-view pass renders
+  // (light_view.h).
+  PathSpace(const RenderScene& scene, int maxDepth, int minEdges = 1, bool withoutLightViews = false);
   const RenderScene& scene() const { return scene_; }
   int maxEdges() const { return maxEdges_; }
   int minEdges() const { return minEdges_; }
+  bool withoutLightViews() const { return withoutLightViews_; }
+  // Whether x is E S* L (x.v[1..k-1] all specular; vacuously for the light seen directly).
+  static bool isLightView(const Path& x);
   static constexpr int kUnlimitedEdges = 32;
 
   // f(x) in the canonical measure, with visibility; *pRaster: where the path lands. Zero (and no raster)
-  // when invalid: length outside [minEdges, maxEdges], a vertex of the wrong kind, a specular vertex without a matching lobe, a
+  // when invalid: length outside [minEdges, maxEdges], a light view (withoutLightViews), a vertex of the wrong kind, a specular vertex without a matching lobe, a
   // blocked edge, the lens edge outside the film.
   Color f(const Path& x, Vec2* pRaster) const;
 
@@ -131,6 +137,7 @@ class PathSpace {
   const RenderScene& scene_;
   int maxEdges_;
   int minEdges_;
+  bool withoutLightViews_;
 };
 
 // x_0 on a point or spot light.

@@ -156,7 +156,9 @@ std::optional<StartPath> startPathFromSample(const PathSpace& space, const Integ
       Vertex sampled;
       Vec2 pRaster = cameraRaster;
       const Color C = connectBdpt(scene, source, light, s, camera, t, &sampled, &pRaster);
-      // separateDirect: the direct pass's paths are not in the chain's space (EvaluatorPssTarget drops them).
+      // separateDirect: the direct pass's paths are not in the chain's space (EvaluatorPssTarget drops them);
+      // nor are the light views of the light-view pass (BdptEvaluator's dropLightViews drops them).
+      if (s == 0 && space.withoutLightViews() && isLightView(camera, t)) continue;
       if (C.isBlack() || segments < space.minEdges()) continue;
       const float w = misWeight(scene, light, s, camera, t, sampled, integrator.heuristic);
       const Color L = C * w;

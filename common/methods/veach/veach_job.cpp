@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/job/mlt_job.h"
+#include "common/methods/veach/light_view.h"
 #include "common/methods/veach/veach_chain.h"
 #include "common/methods/veach/veach_method.h"
 #include "common/mlt/chain.h"
@@ -81,7 +82,16 @@ JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings) {
   method.validate(settings);
   PathSpace check(scene, settings.integrator.maxDepth);  // throws for unsupported lights
   (void)check;
-  return planMarkovChainJob(method, scene, settings);  // pssmlt-bdpt's bootstrap and allocation (veach_job.h)
+  JobPlan plan = planMarkovChainJob(method, scene, settings);  // pssmlt-bdpt's bootstrap and allocation (veach_job.h)
+  if (plan.norm.totalMutations == 0 && method.mutationSettings(settings).lightView > 0) {
+    // No path outside the light views carries light, so there is no chain to carry the light-view pass:
+    // the chains carry those paths themselves (the same image in expectation).
+    spdlog::warn("veach-mlt: job seed {}: no light reaches the camera except by light views (E S* L); planned "
+                 "again with veach-light-view 0, the chains carrying them", settings.seed);
+    settings.params["veach-light-view"] = "0";
+    plan = planMarkovChainJob(method, scene, settings);
+  }
+  return plan;
 }
 
 PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,
@@ -90,7 +100,8 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   const RenderSettings& s = plan.settings;
   if (isDirectUnit(unit)) return runDirectUnit(scene, plan, unit);  // separateDirect: bdpt, as for every method
   if (unit.mutations == 0) throw std::invalid_argument("veach-mlt: work unit " + std::to_string(unit.index) + " has no mutations");
-  const PathSpace space(scene, s.integrator.maxDepth, chainMinLength(s.separateDirect));
+  const uint32_t sppLV = lightViewSpp(mutations.lightView, s.mutationsPerPixel);
+  const PathSpace space(scene, s.integrator.maxDepth, chainMinLength(s.separateDirect), sppLV > 0);
 
   // Start: replay the candidate, then pick one of its strategies.
   Pcg32 pick = chainRng(s.seed, unit.index, 3);
@@ -138,8 +149,16 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     }
   }
 
+  SparseSplatter lightViews(s.width, s.height, uint32_t(lightViewLayer()));
+  if (sppLV > 0) renderLightViews(space, plan, unit, sppLV, lightViews);
+
   result.splats = splatter.take();
   result.splats.layers.push_back(std::move(strata.take().layers.front()));  // bStrataLayer(0) > chainLayer(0)
+  if (sppLV > 0) {
+    SparseSplats lv = lightViews.take();  // lightViewLayer() > bStrataLayer(0)
+    result.splats.nonFinite += lv.nonFinite;
+    result.splats.layers.push_back(std::move(lv.layers.front()));
+  }
   quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
@@ -160,8 +179,15 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
 
 uint64_t veachBSamples(uint64_t mutations) { return (mutations + kMutationsPerBSample - 1) / kMutationsPerBSample; }
 
-std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged) {
-  return developMarkovChainImage(plan, merged);
+std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged, const MutationSettings& mutations) {
+  if (merged.film.pixelCount() == 0) return developMarkovChainImage(plan, merged);  // zeros, or the error
+  const uint32_t sppLV = lightViewSpp(mutations.lightView, plan.settings.mutationsPerPixel);
+  std::vector<double> scales = markovChainLayerScales(plan, merged);
+  if (sppLV > 0 && merged.film.splatLayerCount() > lightViewLayer()) {
+    scales.resize(merged.film.splatLayerCount(), 0.0);
+    scales[lightViewLayer()] = lightViewScale(plan, merged.units, sppLV);
+  }
+  return developMarkovChainImage(plan, merged, scales);
 }
 
 std::string acceptanceSummary(const ChainStats& stats) {

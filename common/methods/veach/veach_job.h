@@ -22,6 +22,11 @@
 // the longer paths only (PathSpace minEdges = chainMinLength(true): f = 0 on the shorter, so moves to them
 // are rejected), and their b, bootstrap candidates and start strategies leave the direct paths out as
 // mmlt's do (EvaluatorPssTarget with separateDirect; startPathFromSample skips those strategies).
+// Light views (light_view.h; on unless veach-light-view is 0): the paths E S* L are not in the chains'
+// space either (PathSpace withoutLightViews, BdptEvaluator dropLightViews for the candidates and b
+// samples); every chain also renders its share of the light-view pass's camera samples into
+// lightViewLayer(), developed with P / N_merged. When nothing but light views carries light (the chains'
+// b is 0: no chain to carry the pass), the plan is made again with the pass off and says so.
 // Scenes: area, point and spot lights (path.h: a point or spot light is x_0 of counting measure);
 // directional and environment lights are refused at plan time, naming the light.
 // Not supported: Kelemen MIS splatting (ignored: expected values).
@@ -42,7 +47,7 @@ namespace mlt::veach {
 JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings);
 PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,
                             const MutationSettings& mutations);
-std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged);
+std::vector<Color> developVeachImage(const JobPlan& plan, const PartialResult& merged, const MutationSettings& mutations);
 // Independent samples of b a chain of `mutations` mutations evaluates (one per 64 mutations, rounded up).
 uint64_t veachBSamples(uint64_t mutations);
 

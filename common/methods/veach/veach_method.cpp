@@ -11,6 +11,7 @@
 #include "common/integrators/evaluators.h"
 #include "common/methods/chain_report.h"
 #include "common/methods/pss_method.h"
+#include "common/methods/veach/light_view.h"
 #include "common/methods/veach/veach_job.h"
 
 namespace mlt {
@@ -34,6 +35,9 @@ std::vector<ParamSpec> VeachMltMethod::params() const {
                "caustic/multi-chain perturbation: smallest angle (radians)", 1e-9, 3.14159, {}});
   p.push_back({"veach-caustic-theta2", ParamSpec::Type::Double, fmt::format("{}", d.theta2),
                "caustic/multi-chain perturbation: largest angle (radians)", 1e-9, 3.14159, {}});
+  p.push_back({"veach-light-view", ParamSpec::Type::Double, fmt::format("{}", d.lightView),
+               "light-view pass (lights seen directly or through mirrors and glass, by camera rays): samples per "
+               "pixel per mutation per pixel (0: off, the chains carry them)", 0, 1000, {}});
   return p;
 }
 
@@ -44,6 +48,7 @@ veach::MutationSettings VeachMltMethod::mutationSettings(const RenderSettings& s
   m.r2 = param(s, "veach-lens-r2");
   m.theta1 = param(s, "veach-caustic-theta1");
   m.theta2 = param(s, "veach-caustic-theta2");
+  m.lightView = param(s, "veach-light-view");
   return m;
 }
 
@@ -70,11 +75,18 @@ PartialResult VeachMltMethod::runUnit(const RenderScene& scene, const JobPlan& p
 }
 
 std::vector<Color> VeachMltMethod::develop(const JobPlan& plan, const PartialResult& merged) const {
-  return veach::developVeachImage(plan, merged);
+  return veach::developVeachImage(plan, merged, mutationSettings(plan.settings));
 }
 
 void VeachMltMethod::addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& m) const {
   addChainMetadata(makeChainReport(plan, merged), m);  // b, acceptance per mutation kind (mutationKinds())
+  m.numbers["lightViewSpp"] = veach::lightViewSpp(mutationSettings(plan.settings).lightView, plan.settings.mutationsPerPixel);
+}
+
+size_t VeachMltMethod::filmLayers(const JobPlan& plan) const {
+  const size_t chains = RenderMethod::filmLayers(plan);
+  const bool pass = veach::lightViewSpp(mutationSettings(plan.settings).lightView, plan.settings.mutationsPerPixel) > 0;
+  return pass && plan.norm.totalMutations > 0 ? std::max(chains, veach::lightViewLayer() + 1) : chains;
 }
 
 // A bdpt sample (all its strategies) in veach-mlt mutations. The results page measured the bootstrap at
@@ -88,7 +100,9 @@ double VeachMltMethod::candidateCost(const RenderSettings& settings) const {
 std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
   // pssmlt-bdpt's target: c(u) of a bdpt sample, whose mean is b = integral of lum f over path space
   // (separateDirect: over the paths of more than kDirectMaxSegments segments, the chains' PathSpace).
-  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator),
+  // With the light-view pass, also without the paths E S* L (light_view.h): c integrates the chains' f.
+  const bool dropLightViews = mutationSettings(settings).lightView > 0;
+  return std::make_unique<EvaluatorPssTarget>(std::make_unique<BdptEvaluator>(scene, settings.integrator, dropLightViews),
                                               settings.separateDirect);
 }
 

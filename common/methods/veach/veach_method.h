@@ -7,6 +7,7 @@
 //   veach-bidir, veach-lens, veach-caustic, veach-multichain, veach-lens-subpath   selection weights (>= 0)
 //   veach-lens-r1, veach-lens-r2          lens / multi-chain film step range in pixels (r2 0: 5% of sqrt(P))
 //   veach-caustic-theta1, veach-caustic-theta2   caustic / multi-chain angle range in radians
+//   veach-light-view                      light-view pass: spp per mutation per pixel (0: off; light_view.h)
 #pragma once
 #include "common/job/mlt_job.h"
 #include "common/methods/method.h"
@@ -29,6 +30,8 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   PartialResult runUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) const override;
   std::vector<Color> develop(const JobPlan& plan, const PartialResult& merged) const override;
   void addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& metadata) const override;
+  // The chain layers, and the light-view pass's layer (light_view.h).
+  size_t filmLayers(const JobPlan& plan) const override;
 
   // ChainJobSpec (the bootstrap and chain allocation of pssmlt-bdpt).
   bool chainsPerLength() const override { return false; }
