@@ -81,7 +81,7 @@ class SparseSplatter {
   uint32_t layer_;
   uint64_t nonFinite_ = 0;
   struct Scratch;
-  Scratch* scratch_;  // one of the thread's scratches, or one of its own if both are in use
+  Scratch* scratch_;  // one of the thread's scratches, or one of its own if all are in use
   bool owned_;
   RGBd* dense_;
   uint8_t* touched_;

@@ -72,6 +72,14 @@ int main(int argc, char** argv) {
         std::partial_sort(order.begin(), order.begin() + top, order.end(), [&](size_t x, size_t y) { return e[x] > e[y]; });
         double total = 0;
         for (double v : e) total += v;
+        // And the share in the pixels brighter than 20x the reference's mean (a light seen directly).
+        double refMean = 0, bright = 0;
+        for (const mlt::Color& c : r.rgb) refMean += double(mlt::luminance(c)) / double(r.rgb.size());
+        size_t brightPixels = 0;
+        for (size_t i = 0; i < e.size(); ++i)
+          if (mlt::luminance(r.rgb[i]) > 20 * refMean) bright += e[i], ++brightPixels;
+        std::printf("pixels brighter than 20x the mean: %zu, %.1f%% of the error\n", brightPixels,
+                    total > 0 ? 100 * bright / total : 0.0);
         for (size_t j = 0; j < top; ++j) {
           const size_t i = order[j];
           std::printf("pixel (%zu, %zu): %.1f%% of the error, luminance %.4g against %.4g\n", i % size_t(a.width),

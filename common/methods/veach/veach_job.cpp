@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "common/job/mlt_job.h"
@@ -149,13 +150,16 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
     }
   }
 
-  SparseSplatter lightViews(s.width, s.height, uint32_t(lightViewLayer()));
-  if (sppLV > 0) renderLightViews(space, plan, unit, sppLV, lightViews);
+  std::optional<SparseSplatter> lightViews;
+  if (sppLV > 0) {
+    lightViews.emplace(s.width, s.height, uint32_t(lightViewLayer()));
+    renderLightViews(space, plan, unit, sppLV, *lightViews);
+  }
 
   result.splats = splatter.take();
   result.splats.layers.push_back(std::move(strata.take().layers.front()));  // bStrataLayer(0) > chainLayer(0)
-  if (sppLV > 0) {
-    SparseSplats lv = lightViews.take();  // lightViewLayer() > bStrataLayer(0)
+  if (lightViews) {
+    SparseSplats lv = lightViews->take();  // lightViewLayer() > bStrataLayer(0)
     result.splats.nonFinite += lv.nonFinite;
     result.splats.layers.push_back(std::move(lv.layers.front()));
   }
