@@ -5,6 +5,7 @@
 // Implemented in common/job/mlt_job.cpp (with common/mlt/).
 #pragma once
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,13 @@ class ChainJobSpec {
   virtual double candidateCost(const RenderSettings& settings) const {
     (void)settings;
     return 1.0;
+  }
+  // The settings to plan again with when the bootstrap finds nothing for the chains to carry (b = 0, no
+  // chain); nullopt (the default): the job is rightly black. veach-mlt: its light-view pass off, since
+  // without chains nothing would carry it (veach_job.h).
+  virtual std::optional<RenderSettings> settingsWhenNoChains(const RenderSettings& settings) const {
+    (void)settings;
+    return std::nullopt;
   }
 };
 

@@ -121,9 +121,12 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     trialUnits.push_back(u);
     trialUnits.back().mutations = std::min(u.mutations, kTrialUnitMutations);
   }
-  // b = 0: no chains to run, whatever the budget. The method's own plan decides what that job is (veach-mlt
-  // plans again without its light-view pass, which its chains carry: veach_job.h).
-  if (trialUnits.empty()) return findMethod(s.method).plan(scene, s);
+  // b = 0: no chains to run, whatever the budget; unless the method plans such a job otherwise (veach-mlt
+  // without its light-view pass, which its chains carry: veach_job.h), it is black.
+  if (trialUnits.empty()) {
+    const std::optional<RenderSettings> again = method->settingsWhenNoChains(s);
+    return again ? findMethod(s.method).plan(scene, *again) : trialPlan;
+  }
 
   // The direct pass (separateDirect) takes its share of the budget first: one of its units, timed. Sized
   // by the plan (spp 0: directSppFor), it grows with the mutations per pixel, so its time per mutation per

@@ -57,6 +57,11 @@ uint64_t multiplierFor(uint64_t pixels) {
   return a;
 }
 
+// (i a) mod pixels, with a = multiplierFor(pixels).
+uint64_t permutedPixel(uint64_t i, uint64_t pixels, uint64_t a) {
+  return static_cast<uint64_t>((static_cast<unsigned __int128>(i % pixels) * a) % pixels);
+}
+
 }  // namespace
 
 uint32_t lightViewSpp(double ratio, double mutationsPerPixel) {
@@ -66,10 +71,7 @@ uint32_t lightViewSpp(double ratio, double mutationsPerPixel) {
 
 size_t lightViewLayer() { return bStrataLayer(0) + 1; }
 
-uint64_t lightViewPixel(uint64_t i, uint64_t pixels) {
-  const uint64_t a = multiplierFor(pixels);
-  return static_cast<uint64_t>((static_cast<unsigned __int128>(i % pixels) * a) % pixels);
-}
+uint64_t lightViewPixel(uint64_t i, uint64_t pixels) { return permutedPixel(i, pixels, multiplierFor(pixels)); }
 
 std::pair<uint64_t, uint64_t> lightViewRange(const JobPlan& plan, const WorkUnit& unit, uint32_t sppLV) {
   if (sppLV == 0 || unit.mutations == 0) return {0, 0};
@@ -114,14 +116,14 @@ Color lightViewRadiance(const PathSpace& space, Vec2 pRaster, Pcg32& rng) {
   return L;
 }
 
-uint64_t renderLightViews(const PathSpace& space, const JobPlan& plan, const WorkUnit& unit, uint32_t sppLV,
-                          SparseSplatter& splatter) {
+void renderLightViews(const PathSpace& space, const JobPlan& plan, const WorkUnit& unit, uint32_t sppLV,
+                      SparseSplatter& splatter) {
   const auto [first, last] = lightViewRange(plan, unit, sppLV);
   const int W = plan.settings.width;
   const uint64_t P = uint64_t(W) * uint64_t(plan.settings.height);
   const uint64_t a = multiplierFor(P);
   for (uint64_t i = first; i < last; ++i) {
-    const uint64_t pixel = static_cast<uint64_t>((static_cast<unsigned __int128>(i % P) * a) % P);
+    const uint64_t pixel = permutedPixel(i, P, a);
     const float x = float(pixel % uint64_t(W)), y = float(pixel / uint64_t(W));
     Pcg32 rng(hashKeys(plan.settings.seed, i), kStream);
     const Vec2 jitter = rng.uniform2();
@@ -130,7 +132,6 @@ uint64_t renderLightViews(const PathSpace& space, const JobPlan& plan, const Wor
     // next pixel in float); non-finite values are counted and dropped there, as every splat's.
     if (!L.isBlack()) splatter.addSplat(Vec2(x + 0.5f, y + 0.5f), L);
   }
-  return last - first;
 }
 
 double lightViewScale(const JobPlan& plan, const std::vector<uint32_t>& mergedUnits, uint32_t sppLV) {

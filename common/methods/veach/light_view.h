@@ -55,9 +55,9 @@ uint64_t lightViewPixel(uint64_t i, uint64_t pixels);
 // only (E S* L with between space.minEdges() and space.maxEdges() edges), bdpt's s = 0 estimate of those
 // paths (throughput f cos / pdf per lobe, no roulette).
 Color lightViewRadiance(const PathSpace& space, Vec2 pRaster, Pcg32& rng);
-// Renders the unit's samples into `splatter` (layer lightViewLayer()); returns how many it rendered.
-uint64_t renderLightViews(const PathSpace& space, const JobPlan& plan, const WorkUnit& unit, uint32_t sppLV,
-                          SparseSplatter& splatter);
+// Renders the unit's samples (lightViewRange) into `splatter` (layer lightViewLayer()).
+void renderLightViews(const PathSpace& space, const JobPlan& plan, const WorkUnit& unit, uint32_t sppLV,
+                      SparseSplatter& splatter);
 // The develop scale of the pass's layer for the units merged: P / (their samples), 0 without samples.
 double lightViewScale(const JobPlan& plan, const std::vector<uint32_t>& mergedUnits, uint32_t sppLV);
 

@@ -84,15 +84,14 @@ JobPlan planVeachJob(const RenderScene& scene, RenderSettings settings) {
   PathSpace check(scene, settings.integrator.maxDepth);  // throws for unsupported lights
   (void)check;
   JobPlan plan = planMarkovChainJob(method, scene, settings);  // pssmlt-bdpt's bootstrap and allocation (veach_job.h)
-  if (plan.norm.totalMutations == 0 && method.mutationSettings(settings).lightView > 0) {
-    // No path outside the light views carries light, so there is no chain to carry the light-view pass:
-    // the chains carry those paths themselves (the same image in expectation).
-    spdlog::warn("veach-mlt: job seed {}: no light reaches the camera except by light views (E S* L); planned "
-                 "again with veach-light-view 0, the chains carrying them", settings.seed);
-    settings.params["veach-light-view"] = "0";
-    plan = planMarkovChainJob(method, scene, settings);
-  }
-  return plan;
+  if (plan.norm.totalMutations > 0) return plan;
+  const std::optional<RenderSettings> again = method.settingsWhenNoChains(settings);
+  if (!again) return plan;
+  // No path outside the light views carries light, so there is no chain to carry the light-view pass:
+  // the chains carry those paths themselves (the same image in expectation).
+  spdlog::warn("veach-mlt: job seed {}: no light reaches the camera except by light views (E S* L); planned "
+               "again with veach-light-view 0, the chains carrying them", settings.seed);
+  return planMarkovChainJob(method, scene, *again);
 }
 
 PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit,

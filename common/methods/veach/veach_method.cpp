@@ -97,6 +97,13 @@ double VeachMltMethod::candidateCost(const RenderSettings& settings) const {
   return 1.3 * (depth < 0 ? 8.0 : std::clamp(2.0 + double(depth) / 3.0, 2.0, 8.0));
 }
 
+std::optional<RenderSettings> VeachMltMethod::settingsWhenNoChains(const RenderSettings& settings) const {
+  if (!(mutationSettings(settings).lightView > 0)) return std::nullopt;
+  RenderSettings s = settings;
+  s.params["veach-light-view"] = "0";
+  return s;
+}
+
 std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
   // pssmlt-bdpt's target: c(u) of a bdpt sample, whose mean is b = integral of lum f over path space
   // (separateDirect: over the paths of more than kDirectMaxSegments segments, the chains' PathSpace).

@@ -44,6 +44,8 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   // (caustic-mirror, door-ajar); the count-sized bootstrap took 13-25% of the job there before this.
   // Modelled as 2 + depth / 3 (3.7 at 5, 6 at 12), at most 8 (also for unlimited depth).
   double candidateCost(const RenderSettings& settings) const override;
+  // With the light-view pass on: the same settings with it off (its chains carry the pass; veach_job.h).
+  std::optional<RenderSettings> settingsWhenNoChains(const RenderSettings& settings) const override;
 
   // The mutation settings from the params (defaults where unset).
   veach::MutationSettings mutationSettings(const RenderSettings& settings) const;
