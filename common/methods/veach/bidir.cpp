@@ -142,7 +142,8 @@ class BidirMutation final : public Mutation {
     }
 
     // ---- eye side: x_k..x_m (eye first), then m' vertices ----
-    std::vector<PathVertex> eye(x.v.rbegin(), x.v.rbegin() + (k - m + 1));
+    thread_local std::vector<PathVertex> eye;  // scratch: no allocation per proposal once grown
+    eye.assign(x.v.rbegin(), x.v.rbegin() + (k - m + 1));
     Vec2 uLens = x.uLens;
     Vec3 cameraDir;
     for (int j = 0; j < mPrime; ++j) {

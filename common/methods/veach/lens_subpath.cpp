@@ -36,7 +36,8 @@ class LensSubpathMutation final : public Mutation {
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     const int m = eyeChainEnd(x);
     const Camera& cam = space_.scene().camera();
-    std::vector<PathVertex> eye;
+    thread_local std::vector<PathVertex> eye;  // scratch: no allocation per proposal once grown
+    eye.clear();
     const Vec2 raster(rng.uniform() * float(cam.width()), rng.uniform() * float(cam.height()));
     const Vec2 uLens = rng.uniform2();
     Vec3 dir;

@@ -23,25 +23,26 @@ namespace mlt::veach {
 namespace {
 
 // The diffuse vertices d_1 > d_2 > ... > d_n of x's eye side, E S+ D (S+ D)* followed by a connectible
-// vertex or the light; empty if x does not have that form with n >= 2.
-std::vector<int> chainEnds(const Path& x) {
-  std::vector<int> d;
+// vertex or the light, into d (its storage reused: no allocation per proposal once grown); empty if x does
+// not have that form with n >= 2. Returns whether d is not empty.
+bool chainEnds(const Path& x, std::vector<int>& d) {
+  d.clear();
   const int k = x.k();
   int i = k - 1;
-  if (i < 1 || !x.v[i].specular) return {};  // the first chain has a specular vertex
+  if (i < 1 || !x.v[i].specular) return false;  // the first chain has a specular vertex
   for (;;) {
     while (i >= 1 && x.v[i].specular) --i;
-    if (i < 0) return {};
+    if (i < 0) break;
     d.push_back(i);
     if (i == 0) {                       // the last chain ends on the light, which it must hit again:
-      if (isDeltaPositionLight(x.v[0])) return {};  // never a point or spot light
+      if (isDeltaPositionLight(x.v[0])) d.clear();  // never a point or spot light
       break;
     }
     if (!x.v[i - 1].specular) break;    // a connectible pair: done
     --i;
   }
-  if (d.size() < 2) return {};
-  return d;
+  if (i < 0 || d.size() < 2) d.clear();
+  return !d.empty();
 }
 
 class MultiChainPerturbation final : public Mutation {
@@ -49,10 +50,14 @@ class MultiChainPerturbation final : public Mutation {
   MultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1, double theta2)
       : space_(space), r1_(r1), r2_(r2), theta1_(theta1), theta2_(theta2) {}
 
-  bool applicable(const Path& x) const override { return !chainEnds(x).empty(); }
+  bool applicable(const Path& x) const override {
+    thread_local std::vector<int> d;
+    return chainEnds(x, d);
+  }
 
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
-    const std::vector<int> d = chainEnds(x);
+    thread_local std::vector<int> d;
+    chainEnds(x, d);
     const int k = x.k();
     const std::optional<Vec2> raster = perturbRaster(space_, x, rng, r1_, r2_);
     if (!raster) return false;
@@ -73,9 +78,9 @@ class MultiChainPerturbation final : public Mutation {
   }
 
   double density(const Path& x, const Path& y) const override {
-    const std::vector<int> d = chainEnds(x);
+    thread_local std::vector<int> d, dOfY;
     const int k = x.k();
-    if (d.empty() || y.k() != k || chainEnds(y) != d || !x.v[k].samePoint(y.v[k])) return 0;
+    if (!chainEnds(x, d) || y.k() != k || !chainEnds(y, dOfY) || dOfY != d || !x.v[k].samePoint(y.v[k])) return 0;
     for (int i = 0; i < d.back(); ++i)
       if (!x.v[i].samePoint(y.v[i])) return 0;
     for (int i = d.back() + 1; i < k; ++i) {

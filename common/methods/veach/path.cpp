@@ -2,6 +2,8 @@
 #include "common/methods/veach/path.h"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -18,6 +20,26 @@ Vec3 unitToward(const Vec3& from, const Vec3& to, float* d2) {
   const Vec3 w = to - from;
   *d2 = lengthSquared(w);
   return *d2 > 0 ? w / std::sqrt(*d2) : Vec3();
+}
+
+// The normal RenderScene::visible gets for a vertex: none at the lens (path.h), else the geometric one.
+Vec3 visibilityNormal(const PathVertex& v) { return v.kind == VertexKind::Camera ? Vec3() : v.ng; }
+
+bool sameBits(const Vec3& a, const Vec3& b) {
+  return std::bit_cast<uint32_t>(a.x) == std::bit_cast<uint32_t>(b.x) &&
+         std::bit_cast<uint32_t>(a.y) == std::bit_cast<uint32_t>(b.y) &&
+         std::bit_cast<uint32_t>(a.z) == std::bit_cast<uint32_t>(b.z);
+}
+
+// Whether the visibility test of x's edge (x_i, x_{i+1}) has the same arguments as that of seen's edge
+// (seen_j, seen_{j+1}).
+bool sameVisibilityTest(const Path& x, int i, const Path& seen, int j) {
+  if (j < 0 || j + 1 > seen.k()) return false;
+  for (int e = 0; e < 2; ++e) {
+    const PathVertex &a = x.v[i + e], &b = seen.v[j + e];
+    if (!sameBits(a.p, b.p) || !sameBits(visibilityNormal(a), visibilityNormal(b))) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -111,6 +133,11 @@ PathSpace::PathSpace(const RenderScene& scene, int maxDepth, int minEdges, bool 
       throw std::invalid_argument(fmt::format("veach-mlt: light {} of the scene is {}; veach-mlt supports area, "
                                               "point and spot lights only", i, type));
   }
+  const Camera& cam = scene.camera();
+  const CameraRay cr = cam.generateRay(Vec2(0.5f * float(cam.width()), 0.5f * float(cam.height())), Vec2(0.5f, 0.5f));
+  float pdfPos = 0, pdfDir = 0;
+  cam.pdfWe(cr.ray, &pdfPos, &pdfDir);
+  lensDensity_ = pdfPos;
 }
 
 bool PathSpace::isLightView(const Path& x) {
@@ -119,7 +146,7 @@ bool PathSpace::isLightView(const Path& x) {
   return true;
 }
 
-Color PathSpace::f(const Path& x, Vec2* pRaster) const {
+Color PathSpace::f(const Path& x, Vec2* pRaster, const Path* seen) const {
   const int k = x.k();
   if (k < minEdges_ || k > maxEdges_) return {};
   if (withoutLightViews_ && isLightView(x)) return {};
@@ -157,8 +184,9 @@ Color PathSpace::f(const Path& x, Vec2* pRaster) const {
     const PathVertex& b = v[i + 1];
     if (!(b.kind == VertexKind::Surface && b.specular)) F *= geometry(a, b);
     if (F.isBlack()) return {};
-    const Vec3 na = a.kind == VertexKind::Camera ? Vec3() : a.ng, nb = b.kind == VertexKind::Camera ? Vec3() : b.ng;
-    if (!scene_.visible(a.p, na, b.p, nb)) return {};
+    // An edge `seen` has (same index from the light, or from the lens) passed this very test.
+    if (seen && (sameVisibilityTest(x, i, *seen, i) || sameVisibilityTest(x, i, *seen, i + seen->k() - k))) continue;
+    if (!scene_.visible(a.p, visibilityNormal(a), b.p, visibilityNormal(b))) return {};
   }
   Ray r;
   r.o = v[k].p;
@@ -214,14 +242,6 @@ double PathSpace::eyeStep(const Path& x, int i) const {
   float d2to;
   unitToward(from.p, to.p, &d2to);
   return double(from.bsdf->pdf(frame.toLocal(wo), frame.toLocal(w), q)) * cosAt(to, w) / d2to;
-}
-
-double PathSpace::lensDensity() const {
-  const Camera& cam = scene_.camera();
-  const CameraRay cr = cam.generateRay(Vec2(0.5f * float(cam.width()), 0.5f * float(cam.height())), Vec2(0.5f, 0.5f));
-  float pdfPos = 0, pdfDir = 0;
-  cam.pdfWe(cr.ray, &pdfPos, &pdfDir);
-  return pdfPos;
 }
 
 double PathSpace::lightStep(const Path& x, int i) const {

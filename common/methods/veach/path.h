@@ -106,7 +106,12 @@ class PathSpace {
   // f(x) in the canonical measure, with visibility; *pRaster: where the path lands. Zero (and no raster)
   // when invalid: length outside [minEdges, maxEdges], a light view (withoutLightViews), a vertex of the wrong kind, a specular vertex without a matching lobe, a
   // blocked edge, the lens edge outside the film.
-  Color f(const Path& x, Vec2* pRaster) const;
+  // `seen`, if given, is a path whose f is not zero (the chain's current state), so every edge of it was
+  // tested unoccluded: an edge of x with the same two ends (bit for bit the same positions and normals
+  // passed to the test) at the same index counted from the light or from the lens is not tested again.
+  // The test is a function of those arguments alone, so f is bit for bit the same with or without `seen`;
+  // a mutation keeps most of a path's edges, so this saves most of its shadow rays.
+  Color f(const Path& x, Vec2* pRaster, const Path* seen = nullptr) const;
 
   // ---- local densities (canonical measure, see above) ----
   // Density of generating x.v[i] from the eye side, from x.v[i+1] (given x.v[i+2]): from the camera by a
@@ -114,7 +119,7 @@ class PathSpace {
   // probability; else the BSDF's solid-angle density converted to area at x.v[i].
   double eyeStep(const Path& x, int i) const;
   // Density of the camera vertex itself when the eye side starts afresh (1 / lens area; 1 for a pinhole).
-  double lensDensity() const;
+  double lensDensity() const { return lensDensity_; }
   // Density of generating x.v[i] from the light side: i = 0 the light point (light choice x area),
   // i = 1 the emitted direction, else BSDF sampling at x.v[i-1] (importance transport; after a specular
   // vertex its lobe probability, in the light-free convention: see lightChainToCanonical).
@@ -138,6 +143,7 @@ class PathSpace {
   int maxEdges_;
   int minEdges_;
   bool withoutLightViews_;
+  double lensDensity_ = 0;  // the camera's pdfPos (a constant of the camera)
 };
 
 // x_0 on a point or spot light.

@@ -50,7 +50,7 @@ Proposal VeachChainState::propose() {
   }
   const double px = settings_.weight[kind] / sum;
   if (!moves_[kind]->propose(x_, rng_, y_)) return {kind, 0.0, false};
-  fy_ = space_.f(y_, &rasterY_);
+  fy_ = space_.f(y_, &rasterY_, &x_);  // x_ has f > 0: its edges are known unoccluded
   if (fy_.isBlack()) return {kind, 0.0, false};
   // The bidirectional mutation with kd = ka = 1 reconnects x to itself: y = x, T-ratio 1.
   if (samePath(x_, y_)) return {kind, 1.0, false};
