@@ -95,6 +95,13 @@ class BidirMutation final : public Mutation {
     if (lp.count() == 0) return false;
     const int lPrime = lp.lo + int(rng.bounded(uint32_t(lp.count())));
     const int mPrime = nZ - lPrime;
+    // A kept end that becomes a connection end must be connectible: y's f evaluates its BSDF off any Dirac
+    // lobe, which for a mirror or glass (Bsdf::isDelta) is zero, so such a y is rejected whatever would be
+    // traced; reject it before tracing. (x_l connects when the light side adds no vertex, x_m when the eye
+    // side adds none; extending from a Dirac x_l already stops at its first sampled direction below.)
+    const auto deltaOnly = [&](int i) { return x.v[i].specular && x.v[i].bsdf && x.v[i].bsdf->isDelta(); };
+    if (lPrime == 0 && l >= 0 && deltaOnly(l)) return false;
+    if (mPrime == 0 && m >= 1 && m <= k - 1 && (l >= 0 || lPrime > 0) && deltaOnly(m)) return false;
 
     // ---- light side: x_0..x_l, then l' vertices ----
     y.v.assign(x.v.begin(), x.v.begin() + (l + 1));
