@@ -10,6 +10,7 @@
 # the environment:
 #   SCENES=cornell-box,caustic-mirror,door-ajar,glossy-plates   METHODS=pt,bdpt,pssmlt,pssmlt-bdpt,mmlt,rjmlt,veach-mlt
 #   BUDGETS=4,16  LONG_SCENES=cornell-box,caustic-mirror  LONG_METHODS=pt,bdpt,mmlt,pssmlt  LONG_BUDGETS=64
+#   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
@@ -21,7 +22,7 @@ cd "$(dirname "$0")/../.."
 SCENES=${SCENES:-cornell-box,caustic-mirror,door-ajar,glossy-plates}
 METHODS=${METHODS:-pt,bdpt,pssmlt,pssmlt-bdpt,mmlt,rjmlt,veach-mlt}
 BUDGETS=${BUDGETS:-4,16}
-LONG_SCENES=${LONG_SCENES:-cornell-box,caustic-mirror}
+LONG_SCENES=${LONG_SCENES-cornell-box,caustic-mirror}  # set but empty: no long phase
 LONG_METHODS=${LONG_METHODS:-pt,bdpt,mmlt,pssmlt}
 LONG_BUDGETS=${LONG_BUDGETS:-64}
 RUNS=${RUNS:-5}
