@@ -15,7 +15,7 @@
 //  - Every method on glossy-plates and caustic-mirror (pt/lt/bdpt included) was re-recorded once for a
 //    deliberate change of the area light's position sampling: meshes of more than 16 triangles pick their
 //    triangle in two levels (area_light.cpp; same density, other numbers for the same u).
-//  - mmlt on every scene: mutations allocated to path lengths by allocationWeights (mlt_job.h) instead
+//  - mmlt on every scene: mutations allocated to path lengths by allocationWeights (common/mlt/allocation.h) instead
 //    of in proportion to b_k.
 //  - mmlt on cornell-box and caustic-mirror, pssmlt on cornell-variety: the bootstrap's budget counts the
 //    candidates' cost (numbers drawn) against the chains' mix (bootstrap.h, chainMixCost), so its size
@@ -43,6 +43,9 @@
 //  - veach-mlt on caustic-mirror: the bidirectional mutation rejects before tracing a proposal whose
 //    connection end would be a mirror or glass vertex (bidir.cpp; f was zero there anyway), so its chains
 //    draw fewer random numbers. The same chain kernel; cornell-box (no Dirac surface) keeps its digest.
+//  - mmlt and rjmlt on every scene: the bootstrap's budget prices the chains' mutations by the plan's mix of
+//    path lengths (allocation.h, mutationWeights) instead of b_k alone, and counts b_1's camera rays
+//    (BootstrapConfig::spentCost), so their bootstraps changed size. Every other method unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -193,29 +196,29 @@ const Case kCases[] = {
     Case{"cornell-box", "bdpt", "19e44f5ee9a6a65d66f3f3683d31d73c905c14a4c5b4ff3e1d57be0037ddc9e4"},
     Case{"cornell-box", "pssmlt", "7d2ee15fa67ef123556052787fc82e705f8cf11cb5fa0fc6314284b8e149fa26"},
     Case{"cornell-box", "pssmlt-bdpt", "69c8b51e810bf09b35c5c4b4205ee83df6b632c8e000b0bff2d8ab72bd68b1f4"},
-    Case{"cornell-box", "mmlt", "8c316e1b5ee57447a4828997bea5e121b56a4bcb1f6c70f290213718ad4098cf"},
+    Case{"cornell-box", "mmlt", "1da8fb37d07df454473f1c3541b46df732833165115d24b4acbb054a417c4fb2"},
     Case{"caustic-mirror", "pt", "1f47d49c9699d18775c3fea75c4e03076cdc895d83bad773cec3c631845d6cd1"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "a5f0f9af415ee839e134ab51f79efa44d8775b351c400cfc76e6a8ba351512a9"},
     Case{"caustic-mirror", "pssmlt", "a0b57fda3d8bca5efaabf507b3b8fc9bd1833de9f73ec3224fdfb5fa1d595781"},
     Case{"caustic-mirror", "pssmlt-bdpt", "97fd6ae49e4cf581903a0a51b86b0aaa3089f72398ace806e56f97608677679a"},
-    Case{"caustic-mirror", "mmlt", "3423529c1961b187b9181923e056d0d959fce9225eb90acb24e3548e2271d7f9"},
+    Case{"caustic-mirror", "mmlt", "1aa066d7e99430a912dc8bbb9bcdcae56f336cc96beb313eeebe41db2438302e"},
     Case{"glossy-plates", "pt", "4e541daf4d331318e90cd9546e0799140b3e884341ed8e26e8a6d7ebf7601462"},
     Case{"glossy-plates", "lt", "30c49b64e9e3551e9215d5e0c4f9e8a239c65302411f35664ba18e8ca1bb1d04"},
     Case{"glossy-plates", "bdpt", "d06e5116ddb56555d63da3d33f04168710620a74af374296c9eeb29b00845d4d"},
     Case{"glossy-plates", "pssmlt", "25d85afb70c9f15c272a921f895d47c0c376ade3e26fadfa2bf33ecd336c230b"},
     Case{"glossy-plates", "pssmlt-bdpt", "7f1c8a4b883703320af3e2680e6e4b1675be552eb64293d9c6ebf5eea5af96a7"},
-    Case{"glossy-plates", "mmlt", "e84c38659cc194b56c978cccade73eec448600e46bafa022ae7e26a7f4ce7743"},
+    Case{"glossy-plates", "mmlt", "d4a9be15c6dbeb704a29a582d717a7fe5d4b39715f834aa988de16cde9f274b2"},
     Case{"cornell-variety", "pt", "26873108e60b97e48986560bfac8ea037b6f8323e9a0265cf15f645ba43bcef1"},
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
     Case{"cornell-variety", "bdpt", "567a7a36a7eb29d624ac83ba717b88bc55936cf8bd2fa07b5d4f501b68fbfda3"},
     Case{"cornell-variety", "pssmlt", "a5cc75bb912834e2fa6fecfb3afd99338df996901c3cb4e21b7de1a991009813"},
     Case{"cornell-variety", "pssmlt-bdpt", "172494ba572571ca88c24ab34529998e6c3f97cf7170a396982f006361eb8d74"},
-    Case{"cornell-variety", "mmlt", "7ba97d92113ed119c4363cf3c1a61f4f03dc1088cb6fea6c87d518139b088198"},
-    Case{"cornell-box", "rjmlt", "29ac08d1ff2d3448333ef0698474ac5c116261c6c70811d3758e3a179b1e6120"},
-    Case{"caustic-mirror", "rjmlt", "ff03fe190a412316644b4d3eb5d0d97452faf19d0743f7bd37c2298456f5557c"},
-    Case{"glossy-plates", "rjmlt", "56668d2d062db1ddfd9dabb290993601b48ec50b42eb1158708c5daa9fd17d6b"},
-    Case{"cornell-variety", "rjmlt", "055b6d142d24b5f0a0a131e6629e3ffb7e6c569a9799b9db34c9fa0e533ff795"},
+    Case{"cornell-variety", "mmlt", "a52c7884716daa0a2dec319c31c355b8962dd8b70bd7da04eebaed732dddc2f1"},
+    Case{"cornell-box", "rjmlt", "84bb26f4a10bb7801bdfd81fbf48ca0d4047ac79838b51b885b7f01f22baec3c"},
+    Case{"caustic-mirror", "rjmlt", "9f13da692d63536dd0bb4d0465899633cbda24c563c61095dc8614b8ca7bb24c"},
+    Case{"glossy-plates", "rjmlt", "c973176cb715443caac289bce951d01b2f1493d6afc025e4b3d0ab9d7ebe278f"},
+    Case{"cornell-variety", "rjmlt", "7348cb21e310637d0674c59b4624433055d63181552450b6b7200c3aef2df561"},
     Case{"cornell-box", "veach-mlt", "ac2128bde81aa160233722bbab79af363d535e3c43d8c2c6d168c710c989902c"},
     Case{"caustic-mirror", "veach-mlt", "f5e646a6a35ba2e7db122d9e4807958158cd48050c8109548ea01d302b60f1e9"},
     Case{"glossy-plates", "veach-mlt", "5392ba7c2108d186c4a6cc63fbd1da0026f9db16615292c0a6944475d73659be"},

@@ -280,9 +280,10 @@ TEST(Bootstrap, BudgetGoesToTheLengthWhoseBIsLeastCertain) {
 }
 
 // The budget counts cost, not candidates: two lengths as noisy as each other, one costing 9x the other
-// per candidate (numbers drawn). The budget is totalCandidates of the chains' mix (b-weighted mean cost of
-// the first round) and the cost spent stays within it; the cheap length gets more of the doublings than it
-// does when both cost the same.
+// per candidate (numbers drawn). The budget is totalCandidates of the chains' mix (the mean cost of the
+// first round weighted as the plan allocates: by b_k here, where both lengths light the same bin) and the
+// cost spent stays within it; the cheap length gets more of the doublings than it does when both cost the
+// same.
 TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
   BootstrapConfig bc;
   bc.candidatesPerLength = 1024;
@@ -293,6 +294,7 @@ TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
     return runBinnedBootstrap(bc, [&]() -> BinnedCandidateFn {
       return [&, expensiveWork](uint64_t i, int k, CandidateInfo* info) {
         info->work = k == 2 ? expensiveWork : 0;
+        info->bin = value(i) > 0 ? 0 : kNoBin;  // one film bin for both: the plan weighs them by b_k
         return value(i);
       };
     });

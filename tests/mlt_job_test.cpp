@@ -181,7 +181,7 @@ TEST(MltJob, ReplayMismatchFailsLoudly) {
   }
 }
 
-// mmlt allocates mutations by allocationWeights (mlt_job.h): b_k * sqrt(gbar_k), from the bootstrap's
+// mmlt allocates mutations by allocationWeights (common/mlt/allocation.h): b_k * sqrt(gbar_k), from the bootstrap's
 // candidates and the film bins their light lands in.
 TEST(MltJob, MmltAllocatesMutationsByAllocationWeights) {
   RenderSettings s = settingsFor("mmlt", 11);
@@ -190,7 +190,7 @@ TEST(MltJob, MmltAllocatesMutationsByAllocationWeights) {
   const Normalization& n = plan.norm;
   ASSERT_EQ(n.bk.size(), 5u);
   const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), plan.settings);
-  const std::vector<double> w = allocationWeights(boot.result);
+  const std::vector<double> w = allocationWeights(boot.result.lengths);
   ASSERT_EQ(w.size(), 4u);
   double sumW = 0;
   for (double x : w) sumW += x;
@@ -209,6 +209,27 @@ TEST(MltJob, MmltAllocatesMutationsByAllocationWeights) {
   // Length 1 is the light seen directly: its light lands on the brightest pixels, so it gets less than
   // its share of b.
   EXPECT_LT(double(n.mutationsPerLength[1]) / double(n.totalMutations), 0.5 * n.bk[1] / n.b);
+}
+
+// The bootstrap's budget prices a mutation as the plan's mix of lengths costs (bootstrap.h, chainMixCost):
+// the mean of chainCost over the mutations the plan gives each length. On the Cornell box length 1 (the
+// light seen directly, cheap) holds ~40% of b but gets a few % of the mutations; weighted by b_k alone, the
+// price was 0.8x the plan's.
+TEST(MltJob, BootstrapBudgetPricesThePlansMixOfLengths) {
+  RenderSettings s = settingsFor("mmlt", 11);
+  const JobPlan plan = planJob(cornell(), s);
+  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), plan.settings);
+  double planCost = 0;
+  for (const LengthBootstrap& lb : boot.result.lengths)
+    planCost += double(plan.norm.mutationsPerLength[size_t(lb.pathLength)]) * chainCost(lb);
+  planCost /= double(plan.norm.totalMutations);
+  EXPECT_NEAR(chainMixCost(boot.result.lengths), planCost, 1e-3 * planCost);
+  double b = 0, bCost = 0;
+  for (const LengthBootstrap& lb : boot.result.lengths) {
+    b += lb.estimate.b;
+    bCost += lb.estimate.b * chainCost(lb);
+  }
+  EXPECT_GT(std::fabs(bCost / b - planCost), 0.05 * planCost) << "b_k weights alone would price it alike";
 }
 
 // allocationWeights on made-up candidates: a uniform image gives b_k (the plain rule); a length whose light
@@ -230,7 +251,7 @@ TEST(MltJob, AllocationWeightsFollowWhereTheLightLands) {
   };
   BootstrapResult uniform;
   uniform.lengths = {length(1, [](size_t) { return 2.0; }), length(2, [](size_t) { return 1.0; })};
-  std::vector<double> w = allocationWeights(uniform);
+  std::vector<double> w = allocationWeights(uniform.lengths);
   ASSERT_EQ(w.size(), 2u);
   EXPECT_NEAR(w[0] / w[1], 2.0, 1e-12);
 
@@ -238,7 +259,7 @@ TEST(MltJob, AllocationWeightsFollowWhereTheLightLands) {
   BootstrapResult lit;
   lit.lengths = {length(1, [&](size_t i) { return i % bins == 0 ? 1.0 : 0.0; }),
                  length(2, [&](size_t) { return 1.0 / bins; })};
-  w = allocationWeights(lit);
+  w = allocationWeights(lit.lengths);
   ASSERT_EQ(w.size(), 2u);
   const double iBright = 1.0 + 1.0 / bins, iDark = 1.0 / bins;  // bin images (mean luminance)
   const double gBright = 1 / (iBright * iBright + kAllocationEps), gDark = 1 / (iDark * iDark + kAllocationEps);
@@ -248,7 +269,7 @@ TEST(MltJob, AllocationWeightsFollowWhereTheLightLands) {
 
   BootstrapResult unbinned = lit;
   unbinned.lengths[0].bin.clear();
-  EXPECT_TRUE(allocationWeights(unbinned).empty());  // the plain rule
+  EXPECT_TRUE(allocationWeights(unbinned.lengths).empty());  // the plain rule
 }
 
 bool samePlan(const JobPlan& a, const JobPlan& b) {

@@ -281,7 +281,7 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
     if (m == "pssmlt") {
       EXPECT_LT(rb.bStdErr, 0.9 * rs.bStdErr) << m.c_str() << ": " << rb.bStdErr << " vs " << rs.bStdErr;
     } else {
-      // mmlt allocates by allocationWeights (mlt_job.h): length 1, the light seen directly, gets a few
+      // mmlt allocates by allocationWeights (common/mlt/allocation.h): length 1, the light seen directly, gets a few
       // percent of the mutations and its b_1 (most of b's variance here) stays mostly the bootstrap's.
       // Every length with a sizeable share of the mutations must gain, and b as a whole.
       EXPECT_LT(rb.bStdErr, rs.bStdErr) << m.c_str();

@@ -52,6 +52,11 @@ constexpr uint64_t kEmissionMinCells = uint64_t(1) << 16;
 // (the Cornell box's: 0.3%). The choice reads the pilot only, which is independent of both estimates, so
 // whichever is chosen stays unbiased.
 constexpr double kEmissionMaxCellShare = 0.01;
+// What one of these camera rays costs in the bootstrap's unit (numbers drawn by a candidate, bootstrap.h
+// candidateCost), so that the bootstrap's budget counts them: measured on one thread at 256x256, a ray
+// takes 214-249 ns (pilot alone on caustic-mirror; pilot and outlines on the Cornell box) and a
+// candidate of length 1 (cost 5) 337-401 ns (bootstrap_cost_bench): about 3 units a ray.
+constexpr double kEmissionRayCost = 3;
 
 struct EmissionEstimate {
   bool estimated = false;   // false: the pilot alone ran (no emission seen, or kEmissionMaxCellShare reached)

@@ -92,40 +92,6 @@ uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost(s) : 0.0);
 }
 
-uint32_t allocationBin(Vec2 pRaster, int width, int height) {
-  const int n = kAllocationBinsPerAxis;
-  const int x = std::clamp(int(std::floor(double(pRaster.x) * n / std::max(width, 1))), 0, n - 1);
-  const int y = std::clamp(int(std::floor(double(pRaster.y) * n / std::max(height, 1))), 0, n - 1);
-  return uint32_t(y * n + x);
-}
-
-std::vector<double> allocationWeights(const BootstrapResult& boot) {
-  std::vector<double> w;
-  if (boot.lengths.size() < 2) return w;
-  for (const LengthBootstrap& lb : boot.lengths)
-    if (lb.bin.size() != lb.c.size()) return w;  // not binned: the plain rule
-  // Bin image: mean luminance of bin t = (bins) * sum_k mean_i(c_i [bin(i) = t]) (each bin is 1/bins of
-  // the film; E_u[c_k 1_t] = (1/P) sum_(j in t) I_kj).
-  const size_t bins = size_t(kAllocationBinsPerAxis) * kAllocationBinsPerAxis;
-  std::vector<double> image(bins, 0.0);
-  for (const LengthBootstrap& lb : boot.lengths) {
-    if (lb.c.empty()) continue;
-    const double scale = double(bins) / double(lb.c.size());
-    for (size_t i = 0; i < lb.c.size(); ++i)
-      if (lb.bin[i] < bins) image[lb.bin[i]] += lb.c[i] * scale;
-  }
-  for (const LengthBootstrap& lb : boot.lengths) {
-    double sumC = 0, sumCg = 0;  // in index order: deterministic
-    for (size_t i = 0; i < lb.c.size(); ++i)
-      if (lb.c[i] > 0 && lb.bin[i] < bins) {
-        sumC += lb.c[i];
-        sumCg += lb.c[i] / (image[lb.bin[i]] * image[lb.bin[i]] + kAllocationEps);
-      }
-    w.push_back(sumC > 0 ? lb.estimate.b * std::sqrt(sumCg / sumC) : 0.0);
-  }
-  return w;
-}
-
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film) {
   RefinedB r;
   const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
@@ -262,6 +228,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   }
   const bool raysForLengthOne = e1 && e1->estimated;
   if (raysForLengthOne) bc.seedOnlyLengths = {1};
+  if (e1 && bc.totalCandidates > 0) bc.spentCost = double(e1->rays) * kEmissionRayCost;  // the rays share the budget
   out.result = runBinnedBootstrap(bc, candidates);
   if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -368,11 +335,9 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   norm.bootstrapSeconds = boot.seconds;
   norm.totalMutations = boot.b > 0 ? M : 0;
 
-  // ---- chain allocation: mutations M_k and chains C_k by allocationWeights (mlt_job.h; the plain rule,
+  // ---- chain allocation: mutations M_k and chains C_k by mutationWeights (common/mlt/allocation.h; the plain rule,
   // proportional to b_k, for one length), largest remainder ----
-  std::vector<double> weights = allocationWeights(boot);
-  if (weights.empty())
-    for (const auto& lb : boot.lengths) weights.push_back(lb.estimate.b);
+  const std::vector<double> weights = mutationWeights(boot.lengths);
   const std::vector<uint64_t> Mk = boot.b > 0 ? apportion(M, weights) : std::vector<uint64_t>(weights.size(), 0);
   const uint64_t C = std::min<uint64_t>(s.chains > 0 ? uint64_t(s.chains) : defaultChains(M), M);
   std::vector<uint64_t> Ck = boot.b > 0 ? apportion(C, weights) : std::vector<uint64_t>(weights.size(), 0);

@@ -1,5 +1,7 @@
 #include "common/mlt/bootstrap.h"
 
+#include "common/mlt/allocation.h"
+
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -131,7 +133,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     std::vector<double> cost(result.lengths.size());
     for (size_t l = 0; l < result.lengths.size(); ++l) cost[l] = candidateCost(result.lengths[l]);
     const double budget = double(config.totalCandidates) * chainMixCost(result.lengths);
-    double spent = bootstrapCost(result.lengths);
+    double spent = config.spentCost + bootstrapCost(result.lengths);
     for (;;) {
       size_t best = 0;
       const auto gain = [&](size_t l) {
@@ -214,14 +216,16 @@ double chainCost(const LengthBootstrap& lb) {
 }
 
 double chainMixCost(const std::vector<LengthBootstrap>& lengths) {
-  double b = 0, bCost = 0, mean = 0;
-  for (const LengthBootstrap& lb : lengths) {
-    const double cost = chainCost(lb);
-    b += lb.estimate.b;
-    bCost += lb.estimate.b * cost;
+  if (lengths.empty()) return kCandidateOverhead;
+  const std::vector<double> w = mutationWeights(lengths);
+  double sumW = 0, wCost = 0, mean = 0;
+  for (size_t l = 0; l < lengths.size(); ++l) {
+    const double cost = chainCost(lengths[l]);
+    sumW += w[l];
+    wCost += w[l] * cost;
     mean += cost / double(lengths.size());
   }
-  return b > 0 ? bCost / b : (lengths.empty() ? kCandidateOverhead : mean);
+  return sumW > 0 ? wCost / sumW : mean;
 }
 
 BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn) {

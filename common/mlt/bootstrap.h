@@ -35,7 +35,7 @@ using CandidateFn = std::function<double(uint64_t index, int pathLength)>;
 // Makes a CandidateFn with its own scratch buffers (called once per parallel task).
 using CandidateFnFactory = std::function<CandidateFn()>;
 // The same, also reporting the film bin the candidate's light lands in (kNoBin: none), which the chain
-// allocation uses to weigh path lengths by where their light lands (mlt_job.cpp, allocationWeights), and
+// allocation uses to weigh path lengths by where their light lands (allocation.h, allocationWeights), and
 // its work: the primary-sample numbers it drew (IndependentSource::reads), a deterministic measure of its
 // cost (a vertex draws a few numbers and traces a ray), which the budgeted sizing counts.
 constexpr uint32_t kNoBin = UINT32_MAX;
@@ -63,6 +63,9 @@ struct BootstrapConfig {
   // emission_estimate.h): their candidates only seed chains, so the budget (or the target) never grows
   // them; they keep the first round's count.
   std::vector<int> seedOnlyLengths;
+  // Cost the caller already spent from the budget (in the candidates' unit, numbers drawn; mmlt: b_1's
+  // camera rays, kEmissionRayCost each), so that the whole bootstrap, not only its candidates, fits it.
+  double spentCost = 0;
 };
 
 // The candidates above the tail threshold: about 1 in 1024, at least kCandidateGroups (develop.h (D3)).
@@ -108,8 +111,11 @@ double bootstrapCost(const std::vector<LengthBootstrap>& lengths);
 constexpr double kCostLargeStepShare = 0.3;
 double chainCost(const LengthBootstrap& lb);
 // The mean cost of a mutation of the chains' mix of lengths: chainCost of each length in proportion to
-// b_k (the chains' mutations go to the lengths about in proportion to b_k; mlt_job.h, allocationWeights).
-// The budget of a budgeted bootstrap is totalCandidates x this, measured on its first round.
+// the mutations the plan gives it (allocation.h, mutationWeights: b_k sqrt(gbar_k) where the candidates
+// are binned, else b_k). The budget of a budgeted bootstrap is totalCandidates x this, measured on its
+// first round. (Weighted by b_k alone it priced a mutation by lengths the chains hardly run: on
+// caustic-mirror a heavy-tailed b_9 made it 1.5x the mix's real cost, and the bootstrap 6.4% of a job
+// planned at 4%: docs/CHAINS.md.)
 double chainMixCost(const std::vector<LengthBootstrap>& lengths);
 
 BootstrapResult runBootstrap(const BootstrapConfig& config, const CandidateFnFactory& makeCandidateFn);

@@ -98,11 +98,12 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     const double probeSeconds = boot.result.seconds;
     // Its throughput in the unit of --bootstrap, the cost of one of the chains' mutations (bootstrap.h,
     // chainMixCost): the probe's cost (numbers drawn) per second over that cost. b_1's camera rays (mmlt,
-    // rjmlt) cost the same at any size: left out of the throughput, and counted again for the bootstrap.
+    // rjmlt) cost the same at any size: left out of the throughput; the bootstrap's budget counts them
+    // itself (BootstrapConfig::spentCost), so what is left of the share is all the bootstrap's.
     const double candidateSeconds = probeSeconds - boot.raySeconds;
     const double perSecond =
         bootstrapCost(boot.result.lengths) / std::max(candidateSeconds, 1e-6) / chainMixCost(boot.result.lengths);
-    const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds - boot.raySeconds);
+    const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds);
     s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
       boot = bootstrapMarkovChainJob(scene, s);
