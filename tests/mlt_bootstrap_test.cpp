@@ -322,4 +322,35 @@ TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
 }
 
 }  // namespace
+// Cost spent outside the candidates (mmlt's b_1 camera rays, BootstrapConfig::spentCost) comes out of
+// the budget: all of it spent, no length doubles; half of it, fewer doublings than with none, and the
+// candidates' cost fits in the half that is left.
+TEST(Bootstrap, SpentCostComesOutOfTheBudget) {
+  BootstrapConfig bc;
+  bc.candidatesPerLength = 1024;
+  bc.pathLengths = {1, 2};
+  bc.totalCandidates = 32768;
+  const BinnedCandidateFnFactory candidates = []() -> BinnedCandidateFn {
+    return [](uint64_t i, int, CandidateInfo* info) {
+      info->work = 3;
+      const double c = IndependentSource(5, i).valueAt(0, 0) < 0.02 ? 50.0 : 0.0;
+      info->bin = c > 0 ? 0 : kNoBin;
+      return c;
+    };
+  };
+  const BootstrapResult none = runBinnedBootstrap(bc, candidates);
+  const double budget = double(bc.totalCandidates) * chainMixCost(none.lengths);  // as the first round prices it
+  const auto run = [&](double spentFraction) {
+    BootstrapConfig c = bc;
+    c.spentCost = spentFraction * budget;
+    return runBinnedBootstrap(c, candidates);
+  };
+  const BootstrapResult half = run(0.5), all = run(1.0);
+  EXPECT_EQ(all.candidates, 2 * bc.candidatesPerLength);  // the first round only
+  EXPECT_LT(half.candidates, none.candidates);
+  EXPECT_GT(half.candidates, all.candidates);
+  EXPECT_LE(bootstrapCost(half.lengths), 0.5 * budget);
+}
+
 }  // namespace mlt
+
