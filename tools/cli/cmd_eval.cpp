@@ -183,7 +183,7 @@ CommandRun setupEval(CLI::App& sub) {
   auto* rrDepth = sub.add_option("--rr-depth", o->rrDepth, "Russian roulette depth (default: the scene's, else 5)")
                       ->check(CLI::NonNegativeNumber);
   sub.add_option("--chains", o->chains, "Markov chains per job (0 = automatic)")->check(CLI::NonNegativeNumber);
-  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 4% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
+  sub.add_option("--bootstrap", o->bootstrap, "Markov chain methods: bootstrap candidates per path length; 0 = automatic (about 3% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   sub.add_option("--large-step", o->largeStep, "Large-step probability (default: each method's, 0.3; rjmlt 0.1)")

@@ -43,7 +43,7 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       ->check(CLI::PositiveNumber);
   add_option("--chains", chains_, "Markov chain methods: number of chains (0 = automatic)")
       ->check(CLI::NonNegativeNumber);
-  add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap size: the cost of this many of the chains' mutations per path length (a candidate's cost is counted by the numbers it draws: a long path costs more than a short one); 0 = automatic (about 4% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
+  add_option("--bootstrap", bootstrap_, "Markov chain methods: bootstrap size: the cost of this many of the chains' mutations per path length (a candidate's cost is counted by the numbers it draws: a long path costs more than a short one; mmlt/rjmlt's camera rays for b_1 come out of it); 0 = automatic (about 3% of the job's time: of the mutations, or of the time budget; b is refined by the chains' large steps, except veach-mlt's)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   add_option("--large-step", largeStep_,
