@@ -322,6 +322,7 @@ TEST(Bootstrap, BudgetCountsTheCandidatesCost) {
 }
 
 }  // namespace
+
 // Cost spent outside the candidates (mmlt's b_1 camera rays, BootstrapConfig::spentCost) comes out of
 // the budget: all of it spent, no length doubles; half of it, fewer doublings than with none, and the
 // candidates' cost fits in the half that is left.
@@ -353,4 +354,3 @@ TEST(Bootstrap, SpentCostComesOutOfTheBudget) {
 }
 
 }  // namespace mlt
-
