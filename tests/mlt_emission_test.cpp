@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -229,6 +230,46 @@ TEST(EmissionEstimate, SmallBrightLightsKeepTheCandidatesB1) {
   const EmissionEstimate box = emissionEstimate(cornell(), settings("mmlt", 2));
   EXPECT_GT(box.maxCellShare, 0);
   EXPECT_LT(box.maxCellShare, kEmissionMaxCellShare);
+}
+
+// A --time budget bootstraps twice (a probe, then the size that fits): the second takes the first's
+// camera rays instead of tracing them again, and is the same bootstrap, bit for bit, as one without it
+// (the rays still count against its budget, so --bootstrap with the resolved size reproduces it). Rays of
+// another seed, film or depth are not taken.
+TEST(EmissionEstimate, ASecondBootstrapReusesTheFirstsRays) {
+  const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
+  ASSERT_TRUE(mmlt);
+  RenderSettings probe = settings("mmlt", 5);
+  probe.bootstrapSamples = 1024;
+  const MarkovChainBootstrap first = bootstrapMarkovChainJob(*mmlt, cornell(), probe);
+  ASSERT_TRUE(first.emission && first.emission->estimated) << "the rays' b_1 is not used: the test checks nothing";
+  EXPECT_GT(first.raySeconds, 0);
+  const auto same = [](const MarkovChainBootstrap& a, const MarkovChainBootstrap& b) {
+    ASSERT_EQ(a.result.lengths.size(), b.result.lengths.size());
+    for (size_t l = 0; l < a.result.lengths.size(); ++l) {
+      EXPECT_EQ(a.result.lengths[l].c, b.result.lengths[l].c) << "length slot " << l;
+      EXPECT_EQ(a.result.lengths[l].estimate.b, b.result.lengths[l].estimate.b) << "length slot " << l;
+      EXPECT_EQ(a.result.lengths[l].estimate.stdErr, b.result.lengths[l].estimate.stdErr) << "length slot " << l;
+    }
+    EXPECT_EQ(a.result.b, b.result.b);
+    EXPECT_EQ(a.result.bStdErr, b.result.bStdErr);
+  };
+  RenderSettings larger = probe;
+  larger.bootstrapSamples = 4096;
+  const MarkovChainBootstrap reused = bootstrapMarkovChainJob(*mmlt, cornell(), larger, &first);
+  const MarkovChainBootstrap fresh = bootstrapMarkovChainJob(*mmlt, cornell(), larger);
+  EXPECT_EQ(reused.raySeconds, 0) << "the rays were traced again";
+  EXPECT_GT(fresh.raySeconds, 0);
+  EXPECT_GT(reused.result.candidates, first.result.candidates) << "the sizes do not differ: the test checks nothing";
+  same(reused, fresh);
+  for (const auto& change : std::vector<std::function<void(RenderSettings&)>>{
+           [](RenderSettings& s) { s.seed = 6; }, [](RenderSettings& s) { s.integrator.maxDepth = 3; }}) {
+    RenderSettings other = larger;
+    change(other);
+    const MarkovChainBootstrap notReused = bootstrapMarkovChainJob(*mmlt, cornell(), other, &first);
+    EXPECT_GT(notReused.raySeconds, 0) << "another job's rays were taken";
+    same(notReused, bootstrapMarkovChainJob(*mmlt, cornell(), other));
+  }
 }
 
 // The bundled Cornell box at 32 x 32 (seed 7, 4000 candidates, depth 4: the farm tests' job): its light,

@@ -178,8 +178,18 @@ void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
                                 "mutations per pixel), got " + std::to_string(s.spp));
 }
 
+namespace {
+// Whether `earlier`'s b_1 camera rays are what emissionEstimate would compute for `s`: it reads the
+// seed, the film and the integrator settings (emission_estimate.h).
+bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s) {
+  if (!earlier || !earlier->emission) return false;
+  const RenderSettings& e = earlier->settings;
+  return e.seed == s.seed && e.width == s.width && e.height == s.height && e.integrator == s.integrator;
+}
+}  // namespace
+
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
-                                             const RenderSettings& settings) {
+                                             const RenderSettings& settings, const MarkovChainBootstrap* earlier) {
   const RenderSettings& s = settings;
   validateMarkovChainSettings(spec, s);
 
@@ -221,11 +231,15 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   const bool lengthOne = spec.chainsPerLength() && lengths.front() == 1;
   std::optional<EmissionEstimate> e1;
   double raySeconds = 0;
-  if (lengthOne) {
+  const bool reused = lengthOne && emissionReusable(earlier, s);
+  if (reused) {
+    e1 = earlier->emission;  // the same rays' result: not traced again (raySeconds stays 0)
+  } else if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
     e1 = emissionEstimate(scene, s);
     raySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  out.emission = e1;
   const bool raysForLengthOne = e1 && e1->estimated;
   if (raysForLengthOne) bc.seedOnlyLengths = {1};
   if (e1 && bc.totalCandidates > 0) bc.spentCost = double(e1->rays) * kEmissionRayCost;  // the rays share the budget
@@ -261,9 +275,11 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       final = e1->estimate;
       final.sampleVar = final.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
       spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
-                   "outline with {} rays each; {:.3f} s); the {} candidates of length 1 said {:.6g} +- {:.2g}",
+                   "outline with {} rays each; {}); the {} candidates of length 1 said {:.6g} +- {:.2g}",
                    spec.name(), final.b, final.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis,
-                   e1->edgeCells, e1->edgeRays, seconds, l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
+                   e1->edgeCells, e1->edgeRays,
+                   reused ? std::string("an earlier bootstrap's, not traced again") : fmt::format("{:.3f} s", seconds),
+                   l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
     } else {
       spdlog::info("{}: b_1 from the candidates: {} ({:.3f} s)", spec.name(),
                    e1->litCells == 0 ? std::string("the camera rays' pilot saw no light")

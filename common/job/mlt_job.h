@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/job/emission_estimate.h"
 #include "common/job/job_types.h"
 #include "common/mlt/allocation.h"
 #include "common/mlt/bootstrap.h"
@@ -78,6 +79,10 @@ struct MarkovChainBootstrap {
   RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples resolved)
   BootstrapResult result;   // result.seconds includes raySeconds
   double raySeconds = 0;    // of those, b_1's camera rays (emission_estimate.h): a cost that does not grow with the candidates
+  // mmlt, rjmlt: those rays' estimate. A pure function of the scene, the seed, the film and the integrator
+  // settings, so a second bootstrap of the same job (a --time budget's final one after its probe) takes it
+  // instead of tracing the rays again (bootstrapMarkovChainJob's `earlier`).
+  std::optional<EmissionEstimate> emission;
 };
 
 // Bootstrap sizing. The bootstrap finds start states, allocates chains to path lengths and gives the
@@ -146,8 +151,13 @@ void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings&
 // separateDirect: the method can leave out the direct light and the direct pass has spp >= 1 or 0 (sized
 // by the plan, directSppFor); throws std::invalid_argument naming the setting.
 void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& settings);
+// `earlier`: a bootstrap of the same scene whose b_1 camera rays (MarkovChainBootstrap::emission) are
+// reused when its seed, film and integrator settings are these; the result is the same, bit for bit, and
+// the rays are still charged to this bootstrap's budget (BootstrapConfig::spentCost), so that the size it
+// resolves to reproduces the image without `earlier`. Its raySeconds is then 0: the rays took no time here.
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
-                                             const RenderSettings& settings);
+                                             const RenderSettings& settings,
+                                             const MarkovChainBootstrap* earlier = nullptr);
 // Chain allocation from an existing bootstrap: the same plan, bit for bit, as planMarkovChainJob(scene,
 // settings). Throws std::invalid_argument naming the field if `settings` differs from the bootstrap's in
 // a field the bootstrap reads.

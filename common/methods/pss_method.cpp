@@ -57,8 +57,9 @@ const ChainJobSpec& spec(const RenderSettings& s) {
 uint64_t bootstrapPerLength(const RenderSettings& s) { return bootstrapPerLength(spec(s), s); }
 std::vector<int> chainPathLengths(const RenderSettings& s) { return chainPathLengths(spec(s), s); }
 void validateMarkovChainSettings(const RenderSettings& s) { validateMarkovChainSettings(spec(s), s); }
-MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& s) {
-  return bootstrapMarkovChainJob(spec(s), scene, s);
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& s,
+                                             const MarkovChainBootstrap* earlier) {
+  return bootstrapMarkovChainJob(spec(s), scene, s, earlier);
 }
 JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& s, const MarkovChainBootstrap& boot) {
   return planMarkovChainJob(spec(s), scene, s, boot);

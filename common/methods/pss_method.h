@@ -56,7 +56,8 @@ class EvaluatorPssTarget final : public PssTarget {
 uint64_t bootstrapPerLength(const RenderSettings& settings);
 std::vector<int> chainPathLengths(const RenderSettings& settings);
 void validateMarkovChainSettings(const RenderSettings& settings);
-MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings);
+MarkovChainBootstrap bootstrapMarkovChainJob(const RenderScene& scene, const RenderSettings& settings,
+                                             const MarkovChainBootstrap* earlier = nullptr);
 JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& settings, const MarkovChainBootstrap& boot);
 
 }  // namespace mlt

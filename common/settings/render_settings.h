@@ -25,6 +25,7 @@ struct IntegratorSettings {
   int maxDepth = 5;           // maximum number of path segments (edges); -1 = unlimited
   int rrDepth = 5;            // Russian roulette starts after this many segments
   MisHeuristic heuristic = MisHeuristic::Power;
+  bool operator==(const IntegratorSettings&) const = default;
 };
 
 enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s1, s2) or Gaussian (sigma)

@@ -104,10 +104,19 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     const double perSecond =
         bootstrapCost(boot.result.lengths) / std::max(candidateSeconds, 1e-6) / chainMixCost(boot.result.lengths);
     const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds);
-    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond));
+    // The final bootstrap reuses the probe's rays (the same estimate: bootstrapMarkovChainJob's `earlier`)
+    // but still charges them to its budget, so that the size resolved here reproduces the image without a
+    // budget: the probe already paid their time, so their cost is added back for the candidates (when any
+    // of the share is left: otherwise the probe is the bootstrap).
+    const double rayMutations = boot.emission && shareLeft > 0
+                                    ? double(boot.emission->rays) * kEmissionRayCost / chainMixCost(boot.result.lengths)
+                                    : 0.0;
+    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond + rayMutations));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
-      boot = bootstrapMarkovChainJob(scene, s);
+      const MarkovChainBootstrap probed = std::move(boot);
+      boot = bootstrapMarkovChainJob(scene, s, &probed);
       boot.result.seconds += probeSeconds;
+      boot.raySeconds = probed.raySeconds;
     }
   } else {
     boot = bootstrapMarkovChainJob(scene, s);
