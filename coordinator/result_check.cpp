@@ -60,10 +60,20 @@ void checkStrata(const PartialResult& r, int width, uint32_t maxLayer) {
 
 }  // namespace
 
+namespace {
+// The path length slots whose chain and strata layers a job may fill.
+size_t chainSlots(const JobPlan& plan) {
+  return std::max<size_t>({1, plan.norm.mutationsPerLength.size(),
+                           plan.settings.integrator.maxDepth >= 0 ? size_t(plan.settings.integrator.maxDepth) + 1 : 0});
+}
+}  // namespace
+
 uint32_t maxSplatLayer(const JobPlan& plan) {
-  const size_t slots = std::max<size_t>({1, plan.norm.mutationsPerLength.size(),
-                                         plan.settings.integrator.maxDepth >= 0 ? size_t(plan.settings.integrator.maxDepth) + 1 : 0});
-  return uint32_t(std::min<size_t>(wire::kMaxSplatLayer, maxChainFilmLayer(slots)));
+  size_t maxLayer = maxChainFilmLayer(chainSlots(plan));
+  const size_t planned = plan.norm.mutationsPerLength.size();  // Kelemen MIS: the large steps' layers (D7)
+  if (plan.settings.splatting == MltSplatting::KelemenMIS && planned > 0)
+    maxLayer = std::max(maxLayer, largeStepLayer(planned - 1, planned));
+  return uint32_t(std::min<size_t>(wire::kMaxSplatLayer, maxLayer));
 }
 
 void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const PartialResult& r) {
@@ -95,7 +105,7 @@ void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const 
                                                  i / size_t(w), counts[i], pixelSamples));
   checkBuffer(r.film.pixelSums(), "partial.pixel_sums", w);
   for (uint32_t l : r.film.splatLayers()) checkBuffer(r.film.splatLayer(l), fmt::format("partial.splat_layers[{}]", l), w);
-  checkStrata(r, w, maxLayer);
+  checkStrata(r, w, uint32_t(std::min<size_t>(maxLayer, maxChainFilmLayer(chainSlots(plan)))));  // not (D7)'s
 }
 
 }  // namespace mlt::farm

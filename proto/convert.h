@@ -63,7 +63,7 @@ v1::PartialHeader partialHeader(const PartialResult& r);
 // Raw film bytes: pixel sums (3 doubles/pixel), pixel counts (1 double/pixel), then the sums of every
 // allocated splat layer in ascending order (3/pixel each; Film::splatLayers lists them, layer 0 always),
 // little-endian IEEE-754, row-major. Exact: decode(encode(f)) has the same bits.
-inline constexpr uint32_t kMaxSplatLayer = 2050;  // mlt/develop.h maxChainFilmLayer(1025): max depth <= 1024
+inline constexpr uint32_t kMaxSplatLayer = 3075;  // mlt/develop.h largeStepLayer(1024, 1025): max depth <= 1024
 std::string encodeFilm(const Film& film);
 // A zero film of that size with those splat layers, checked as decodeFilm checks them (WireError).
 Film zeroFilm(int width, int height, uint64_t nonFinite, const std::vector<uint32_t>& layers);

@@ -40,8 +40,8 @@ SparseSplatter::SparseSplatter(int width, int height, uint32_t layer) : width_(w
     throw std::invalid_argument("SparseSplatter: film size must be positive, got " + std::to_string(width) + "x" +
                                 std::to_string(height));
   // Scratches per thread, reused unit after unit: a chain unit holds up to three splatters at once (its
-  // splats, its b strata, mlt/develop.h (D6), and veach-mlt's light views); a further one alive on the same
-  // thread (a test) gets its own.
+  // splats, its b strata, mlt/develop.h (D6), and veach-mlt's light views or Kelemen MIS's large steps,
+  // (D7)); a further one alive on the same thread (a test) gets its own.
   static thread_local Scratch threadScratch[3];
   Scratch* free = nullptr;
   for (Scratch& s : threadScratch)

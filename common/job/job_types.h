@@ -44,6 +44,9 @@ struct Normalization {
   uint64_t totalMutations = 0;
   uint64_t bootstrapSamples = 0;
   double bootstrapSeconds = 0;
+  // The b a chain of `slot` weights Kelemen MIS splats with, and its large-step layer is developed with
+  // (mlt/develop.h (D7)): the bootstrap's b_k (mmlt, rjmlt) or b.
+  double weightB(size_t slot) const { return bk.empty() ? b : (slot < bk.size() ? bk[slot] : 0.0); }
   // The tail threshold the chains of a slot split their large steps' sums at (develop.h (D3)); infinity
   // where the plan has no bootstrap for the slot.
   double tailThreshold(size_t slot) const {

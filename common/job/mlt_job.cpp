@@ -436,7 +436,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const int slot = k < 0 ? 0 : k;
   if (slot >= int(norm.mutationsPerLength.size()) || norm.mutationsPerLength[slot] == 0)
     throw std::invalid_argument("work unit " + std::to_string(unit.index) + ": the plan has no mutations for path length " + std::to_string(k));
-  const double bChain = spec.chainsPerLength() ? norm.bk[slot] : norm.b;  // Kelemen MIS weights only
+  const double bChain = norm.weightB(size_t(slot));  // Kelemen MIS weights only
 
   PartialResult result;
   result.units = {unit.index};
@@ -463,9 +463,12 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   const bool stratify = !spec.chainsPerLength();
   std::optional<SparseSplatter> strata;
   if (stratify) strata.emplace(s.width, s.height, uint32_t(bStrataLayer(size_t(slot))));
-  SparseSink sink(splatter, strata ? &*strata : nullptr);  // scaled by b_k P / M_k at develop (D2)
+  const bool mis = s.splatting == MltSplatting::KelemenMIS;
+  std::optional<SparseSplatter> largeSteps;  // (D7): scaled by the weights' b_k P / M_k at develop
+  if (mis) largeSteps.emplace(s.width, s.height, uint32_t(largeStepLayer(size_t(slot), norm.mutationsPerLength.size())));
+  SparseSink sink(splatter, strata ? &*strata : nullptr, largeSteps ? &*largeSteps : nullptr);  // b_k P / M_k (D2)
   ChainConfig config;
-  config.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
+  config.splatting = mis ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
   config.largeStepProb = s.largeStepProb;
   config.b = bChain;
   config.tau = plan.norm.tailThreshold(size_t(slot));
@@ -475,6 +478,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
 
   result.splats = splatter.take();
   if (strata) result.splats.layers.push_back(std::move(strata->take().layers.front()));  // bStrataLayer > chainLayer
+  if (largeSteps) result.splats.layers.push_back(std::move(largeSteps->take().layers.front()));  // the last (D7)
   quantizeSplats(result.splats, s.seed, unit.index);
   result.samples = unit.mutations;
   ChainStats& st = result.stats;
@@ -533,6 +537,11 @@ std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialRes
   for (size_t slot = 0; slot < M.size() && chainLayer(slot) < scales.size(); ++slot)
     if (M[slot] > 0 && slot < refined.perSlot.size())
       scales[chainLayer(slot)] = chainSplatScale(refined.perSlot[slot].b, M[slot], P);
+  // largeStepLayer(slot) (Kelemen MIS, (D7)): the b the chains weighted by, the bootstrap's, and the same M_k.
+  const Normalization& norm = plan.norm;
+  const size_t slots = norm.mutationsPerLength.size();
+  for (size_t slot = 0; slot < M.size() && slot < slots && largeStepLayer(slot, slots) < scales.size(); ++slot)
+    if (M[slot] > 0) scales[largeStepLayer(slot, slots)] = chainSplatScale(norm.weightB(slot), M[slot], P);
   return scales;
 }
 

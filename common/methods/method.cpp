@@ -85,7 +85,9 @@ uint64_t RenderMethod::unitWork(const JobPlan& plan, const WorkUnit& unit) const
 }
 
 size_t RenderMethod::filmLayers(const JobPlan& plan) const {
-  return family() == MethodFamily::MarkovChain ? chainFilmLayers(plan.norm.mutationsPerLength) : 1;
+  return family() == MethodFamily::MarkovChain
+             ? chainFilmLayers(plan.norm.mutationsPerLength, plan.settings.splatting == MltSplatting::KelemenMIS)
+             : 1;
 }
 
 std::string RenderMethod::paramText(const RenderSettings& s, const std::string& key) const {

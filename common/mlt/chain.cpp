@@ -51,8 +51,10 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
 
     double wy, wx;
     if (mis) {
-      const double large = p.independent ? 1.0 : 0.0;
-      wy = (cy > 0 || large > 0) ? (a + large) / (cy + bPlarge) : 0.0;
+      // The Metropolis share (a and 1 - a) here; a large step's own share, L = 1, into the sink's
+      // large-step layer, which is developed with this chain's b, not the refined one (chain.h).
+      if (p.independent && !y->splats.empty()) sink.largeStepSplat(*y, 1.0 / (cy + bPlarge));
+      wy = cy > 0 ? a / (cy + bPlarge) : 0.0;
       wx = (1 - a) / (cx + bPlarge);
     } else {
       wy = cy > 0 ? a / cy : 0.0;

@@ -20,6 +20,13 @@
 //     so the chain splats with weight (a + L) / (c(y) + b p_large) and (1 - a) / (c(x) + b p_large).
 //     With p_large = 0 these reduce to the expected-value weights a / c(y), (1 - a) / c(x).
 //     Hence a chain using KelemenMIS must be given b (its own b_k for an mmlt chain of length k).
+//     That b is the bootstrap's, b_w, while the image is developed with the refined b^ (develop.h (D3)).
+//     In expectation the Metropolis share of pixel j's sum is (M / b) * integral of c f_j / (c + b_w p),
+//     the large steps' share p M * integral of f_j / (c + b_w p) (uniform samples: no b in it). Developed
+//     together with b^ P / M, pixel j would be  integral of f_j (b^ p + (b^/b) c) / (c + b_w p), off by
+//     p (b - b_w) / (c + b_w p) of f_j where b_w misses b: up to b_w's whole error in dark pixels. So the
+//     large steps' share goes to a layer of its own (ChainSink::largeStepSplat), developed with b_w P / M:
+//     b_w p + (b^/b) c over c + b_w p, which is 1 when b^ = b, whatever b_w is.              (chain.h (K1))
 // Weights of the current state are accumulated and splatted once when the state changes (Kelemen's
 // Next(), sec. 6): fewer splats, same estimator.
 #pragma once
@@ -73,6 +80,9 @@ class ChainSink {
  public:
   virtual ~ChainSink() = default;
   virtual void splat(const PathContribution& path, double weight) = 0;
+  // Kelemen MIS: a large step's own share (the L of the weights above), developed with the chain's b_w
+  // (K1). A sink without a layer for it adds it to the others (right only where b_w is b).
+  virtual void largeStepSplat(const PathContribution& path, double weight) { splat(path, weight); }
   // An independent proposal's bulk m = min(c, tau) at its stratum point u in [0,1)^2 (ChainState::
   // stratumPoint; develop.h (D6)). A sink that keeps no strata ignores it.
   virtual void stratumSample(Vec2 u, double m) { (void)u, (void)m; }

@@ -65,9 +65,9 @@
 // strata's estimated variance enters SE(b_k^) in place of v_L.                                       (D6)
 // b = sum_k b_k^, SE(b) = sqrt(sum_k SE(b_k^)^2) (independent lengths).
 // (Using b_k^ from the same run as the splats makes I_j a ratio estimator, biased by O(1/N): negligible
-// beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting still weights
-// with the bootstrap's b_k, which the chain must know; its large-step weights are therefore only as good
-// as the bootstrap (ChainSplatting::KelemenMIS is not the default).
+// beside its noise at the millions of large steps of a real job.) Kelemen's MIS splatting weights with the
+// bootstrap's b_k, which the chain must know; the large steps' share of its splats is developed with that
+// same b_k, in a layer of its own (D7), so that an error of the bootstrap's b_k moves only the weights.
 //
 // ---- Direct illumination rendered separately (separateDirect) -------------------------------------
 // Paths of at most kDirectMaxSegments segments are rendered by bdpt (pixel samples + t = 1 splats) and
@@ -101,11 +101,16 @@ inline size_t chainLayer(size_t slot) { return 2 * slot + 1; }
 inline size_t bStrataLayer(size_t slot) { return 2 * slot + 2; }
 // The largest film layer a job with `slots` path length slots fills.
 inline size_t maxChainFilmLayer(size_t slots) { return bStrataLayer(slots == 0 ? 0 : slots - 1); }
+// Kelemen MIS splatting (chain.h (K1)): the large steps' own share of slot's splats, in a layer after
+// every chain and strata layer of a job of `slots` path length slots (plan.norm.mutationsPerLength.size()),
+// developed with the b the chains weighted by (the bootstrap's b, or b_k), not the refined one.  (D7)
+inline size_t largeStepLayer(size_t slot, size_t slots) { return maxChainFilmLayer(slots) + 1 + slot; }
 // The splat layers a chain job's films hold: layer 0 (light-traced splats of a direct pass) and, per path
-// length slot that has mutations, its chain layer and its strata layer.
-inline size_t chainFilmLayers(const std::vector<uint64_t>& mutationsPerSlot) {
+// length slot that has mutations, its chain layer and its strata layer, and with Kelemen MIS its
+// large-step layer.
+inline size_t chainFilmLayers(const std::vector<uint64_t>& mutationsPerSlot, bool largeStepLayers = false) {
   size_t layers = 1;
-  for (uint64_t m : mutationsPerSlot) layers += m > 0 ? 2 : 0;
+  for (uint64_t m : mutationsPerSlot) layers += m > 0 ? (largeStepLayers ? 3 : 2) : 0;
   return layers;
 }
 

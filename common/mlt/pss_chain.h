@@ -63,38 +63,47 @@ class EvaluatorTarget final : public ChainTarget {
 
 // Splats into one splat layer of a film (a Markov chain job: chainLayer(path length slot), develop.h (D2)),
 // unscaled: normalization happens only when the film is developed.
+// largeStepLayer (Kelemen MIS, chain.h (K1)): the layer of the large steps' own share; by default `layer`.
 class FilmSink final : public ChainSink {
  public:
-  explicit FilmSink(Film& film, size_t layer = 0) : film_(film), layer_(layer) {}
+  explicit FilmSink(Film& film, size_t layer = 0) : FilmSink(film, layer, layer) {}
+  FilmSink(Film& film, size_t layer, size_t largeStepLayer)
+      : film_(film), layer_(layer), largeStepLayer_(largeStepLayer) {}
   FilmSink(Film&, double) = delete;  // the sink takes a layer, not a weight scale (scales apply at develop)
-  void splat(const PathContribution& path, double weight) override {
-    const float w = static_cast<float>(weight);
-    for (const Splat& s : path.splats) film_.addSplat(s.pRaster, s.L * w, layer_);
-  }
+  void splat(const PathContribution& path, double weight) override { add(path, weight, layer_); }
+  void largeStepSplat(const PathContribution& path, double weight) override { add(path, weight, largeStepLayer_); }
 
  private:
+  void add(const PathContribution& path, double weight, size_t layer) {
+    const float w = static_cast<float>(weight);
+    for (const Splat& s : path.splats) film_.addSplat(s.pRaster, s.L * w, layer);
+  }
   Film& film_;
-  size_t layer_;
+  size_t layer_, largeStepLayer_;
 };
 
 // Splats into one unit's sparse splat buffer (common/film/sparse_splats.h), unscaled like FilmSink: what
 // a chain work unit uses, so that it never allocates or scans a dense film.
 // strata (optional): the unit's b strata layer (develop.h (D6)), on a film of the same size.
+// largeSteps (optional): Kelemen MIS's large-step layer (chain.h (K1)); without it they go to `splatter`.
 class SparseSink final : public ChainSink {
  public:
-  explicit SparseSink(SparseSplatter& splatter, SparseSplatter* strata = nullptr)
-      : splatter_(splatter), strata_(strata) {}
-  void splat(const PathContribution& path, double weight) override {
-    const float w = static_cast<float>(weight);
-    for (const Splat& s : path.splats) splatter_.addSplat(s.pRaster, s.L * w);
-  }
+  explicit SparseSink(SparseSplatter& splatter, SparseSplatter* strata = nullptr, SparseSplatter* largeSteps = nullptr)
+      : splatter_(splatter), strata_(strata), largeSteps_(largeSteps ? *largeSteps : splatter) {}
+  void splat(const PathContribution& path, double weight) override { add(splatter_, path, weight); }
+  void largeStepSplat(const PathContribution& path, double weight) override { add(largeSteps_, path, weight); }
   void stratumSample(Vec2 u, double m) override {
     if (strata_) strata_->addAt(strataPixel(u.x, u.y, strata_->width(), strata_->height()), strataSample(m));
   }
 
  private:
+  static void add(SparseSplatter& to, const PathContribution& path, double weight) {
+    const float w = static_cast<float>(weight);
+    for (const Splat& s : path.splats) to.addSplat(s.pRaster, s.L * w);
+  }
   SparseSplatter& splatter_;
   SparseSplatter* strata_;
+  SparseSplatter& largeSteps_;
 };
 
 }  // namespace mlt
