@@ -101,7 +101,9 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
     c->set_kelemen_s1(s.kelemenS1);
     c->set_kelemen_s2(s.kelemenS2);
     c->set_gaussian_sigma(s.gaussianSigma);
-    c->set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value" : "kelemen-mis");
+    c->set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value"
+                     : s.splatting == MltSplatting::KelemenMIS  ? "kelemen-mis"
+                                                                : "");  // the method's
     c->set_separate_direct(s.separateDirect);
     *c->mutable_direct() = samples;
   } else {
@@ -181,7 +183,8 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     s.kelemenS1 = float(c.kelemen_s1());
     s.kelemenS2 = float(c.kelemen_s2());
     s.gaussianSigma = float(c.gaussian_sigma());
-    if (c.splatting() == "expected-value" || c.splatting().empty()) s.splatting = MltSplatting::ExpectedValue;
+    if (c.splatting().empty()) s.splatting = MltSplatting::MethodDefault;
+    else if (c.splatting() == "expected-value") s.splatting = MltSplatting::ExpectedValue;
     else if (c.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
     else throw WireError("settings.chains.splatting",
                          fmt::format("unknown '{}' (expected-value|kelemen-mis)", c.splatting()));

@@ -15,7 +15,7 @@ namespace {
 
 // Small and fast (32x32, 8 mutations per pixel); non-default kernel and splatting, bdpt for direct light.
 const std::vector<std::string> kSettings{
-    "-m", "mmlt", "--kernel", "gaussian", "--sigma", "0.02", "--splatting", "kelemen-mis", "--separate-direct",
+    "-m", "mmlt", "--kernel", "gaussian", "--sigma", "0.02", "--splatting", "expected-value", "--separate-direct",
     "--seed", "7", "--width", "32", "--height", "32", "--max-depth", "4", "--spp", "4", "--mutations-per-pixel", "8",
     "--chains", "16", "--bootstrap", "4000"};
 
@@ -44,14 +44,14 @@ TEST(FarmSubmitSettings, KernelSplattingAndSeparateDirectReachThePlanAndMatchRen
     EXPECT_EQ(s.method, "mmlt");
     EXPECT_EQ(s.kernel, MutationKernel::Gaussian);
     EXPECT_EQ(s.gaussianSigma, 0.02f);
-    EXPECT_EQ(s.splatting, MltSplatting::KelemenMIS);
+    EXPECT_EQ(s.splatting, MltSplatting::ExpectedValue);  // not the default (Kelemen MIS)
     EXPECT_TRUE(s.separateDirect);
   }
   EXPECT_GT(partials, 0u);
   const ExrImage submitted = readExr(farmExr);
   EXPECT_EQ(submitted.metadata.strings.at("kernel"), "gaussian");
   EXPECT_EQ(float(submitted.metadata.numbers.at("kernelSigma")), 0.02f);
-  EXPECT_EQ(submitted.metadata.strings.at("splatting"), "kelemen-mis");
+  EXPECT_EQ(submitted.metadata.strings.at("splatting"), "expected-value");
   EXPECT_EQ(submitted.metadata.numbers.at("separateDirect"), 1.0);
 
   // The same arguments to `render`: the same settings, hence the same pixels.

@@ -128,6 +128,39 @@ TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
   }
 }
 
+// The splatting a job leaves to its method: Kelemen MIS for the primary-sample chains, whose large steps'
+// share goes to its own layer per path length slot (develop.h (D7)); expected values for veach-mlt, which
+// has no large steps and refuses Kelemen MIS by name. Expected values keep no such layer.
+TEST(MltJob, SplattingIsTheMethodsUnlessGiven) {
+  for (const std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt"}) {
+    RenderSettings s = settingsFor(m, 3);
+    ASSERT_EQ(s.splatting, MltSplatting::MethodDefault);
+    const JobPlan plan = planJob(cornell(), s);
+    EXPECT_EQ(plan.settings.splatting, MltSplatting::KelemenMIS) << m;
+    const size_t slots = plan.norm.mutationsPerLength.size();
+    const std::vector<PartialResult> parts = runAll(cornell(), plan);
+    PartialResult merged;
+    for (const PartialResult& p : parts) merged.add(p);
+    for (size_t slot = 0; slot < slots; ++slot)
+      EXPECT_EQ(merged.film.hasSplatLayer(largeStepLayer(slot, slots)), plan.norm.mutationsPerLength[slot] > 0)
+          << m << " slot " << slot;
+    s.splatting = MltSplatting::ExpectedValue;
+    const JobPlan ev = planJob(cornell(), s);
+    PartialResult evMerged;
+    for (const PartialResult& p : runAll(cornell(), ev)) evMerged.add(p);
+    EXPECT_LE(evMerged.film.splatLayerCount(), largeStepLayer(0, slots)) << m << ": expected values keep no large-step layer";
+  }
+  RenderSettings v = settingsFor("veach-mlt", 3);
+  EXPECT_EQ(planJob(cornell(), v).settings.splatting, MltSplatting::ExpectedValue);
+  v.splatting = MltSplatting::KelemenMIS;
+  try {
+    planJob(cornell(), v);
+    ADD_FAILURE() << "veach-mlt planned a job with Kelemen MIS splatting";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("kelemen-mis"), std::string::npos) << e.what();
+  }
+}
+
 // separateDirect without spp (spp = 0): the plan sizes the direct pass from the mutations per pixel, and
 // the plan is the one an explicit spp of that size gives, unit for unit and pixel for pixel. The plan
 // records the resolved spp (an EXR's metadata reproduces the job); a negative spp is refused.
@@ -358,7 +391,8 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
   EXPECT_EQ(back.settings.largeStepProb, plan.settings.largeStepProb);
   EXPECT_EQ(back.settings.kelemenS1, plan.settings.kelemenS1);
   EXPECT_EQ(m.strings.at("kernel"), "kelemen");
-  EXPECT_EQ(m.strings.at("splatting"), "expected-value");
+  EXPECT_EQ(m.strings.at("splatting"), "kelemen-mis");  // mmlt's default
+  EXPECT_EQ(back.settings.splatting, MltSplatting::KelemenMIS);
   const std::string text = formatChainSummary(r, 1.5, 2.5);
   EXPECT_NE(text.find("b = "), std::string::npos) << text;
   EXPECT_NE(text.find("acceptance"), std::string::npos) << text;

@@ -310,8 +310,10 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
 
 TEST(RefinedB, ImageIsDevelopedWithTheRefinedB) {
   // Scaling every large-step sum by 2 doubles b_k (and nothing else), so every chain layer's
-  // contribution doubles: the image minus its direct pass doubles exactly.
+  // contribution doubles: the image minus its direct pass doubles exactly. (Expected values: Kelemen MIS's
+  // large-step layers are developed with the bootstrap's b_k, (D7), MltChain1D.KelemenMisStaysRight...)
   RenderSettings s = settingsFor("mmlt", 9, 32);
+  s.splatting = MltSplatting::ExpectedValue;
   const JobPlan plan = planJob(cornell(), s);
   PartialResult merged = runJob(plan);
   const std::vector<Color> before = developImage(plan, merged);
@@ -361,13 +363,16 @@ TEST(RefinedB, LargeStepSumsMergeExactlyInAnyGrouping) {
 
 TEST(RefinedB, EachPathLengthSplatsIntoItsOwnLayer) {
   const JobPlan plan = planJob(cornell(), settingsFor("mmlt", 17, 8));
+  ASSERT_EQ(plan.settings.splatting, MltSplatting::KelemenMIS);
+  const size_t slots = plan.norm.mutationsPerLength.size();
   for (const WorkUnit& u : plan.units) {
     PartialResult r = runWorkUnit(cornell(), plan, u);
     r.foldSplats();  // a chain unit's splats travel sparse (common/film/sparse_splats.h)
-    const size_t chain = chainLayer(size_t(u.pathLength));
+    const size_t chain = chainLayer(size_t(u.pathLength)), large = largeStepLayer(size_t(u.pathLength), slots);
     ASSERT_TRUE(r.film.hasSplatLayer(chain)) << "unit " << u.index;
+    ASSERT_TRUE(r.film.hasSplatLayer(large)) << "unit " << u.index << ": Kelemen MIS's large steps (D7)";
     for (size_t l = 1; l < r.film.splatLayerCount(); ++l)  // its splats only (mmlt keeps no strata, (D6))
-      EXPECT_EQ(r.film.hasSplatLayer(l), l == chain) << "unit " << u.index << " layer " << l;
+      EXPECT_EQ(r.film.hasSplatLayer(l), l == chain || l == large) << "unit " << u.index << " layer " << l;
   }
 }
 

@@ -64,6 +64,7 @@ int directSppFor(double mutationsPerPixel) {
 
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
   if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
+  if (s.splatting == MltSplatting::MethodDefault) s.splatting = spec.defaultSplatting();
   if (s.separateDirect && s.spp == 0) s.spp = directSppFor(s.mutationsPerPixel);
   return s;
 }
@@ -165,6 +166,9 @@ void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings&
   if (s.integrator.maxDepth < -1) throw std::invalid_argument("settings: max depth must be >= -1 (-1 = unlimited)");
   if (s.integrator.rrDepth < 0) throw std::invalid_argument("settings: rr depth must be >= 0");
   validateSeparateDirect(spec, s);
+  if (s.splatting == MltSplatting::KelemenMIS && !spec.supportsKelemenMis())
+    throw std::invalid_argument("settings: " + spec.name() + " has no large steps to weight: Kelemen MIS splatting "
+                                "(splatting = kelemen-mis) is not supported; use expected-value");
   chainPathLengths(spec, s);  // chains per length: a valid max depth
 }
 

@@ -52,6 +52,11 @@ class ChainJobSpec {
   // 1: a candidate is one evaluation of the chain's own target (pssmlt, pssmlt-bdpt, mmlt, rjmlt).
   // The large-step probability when the settings leave it to the method (largeStepProb < 0).
   virtual float defaultLargeStepProb() const { return 0.3f; }
+  // The splatting a job gets when its settings leave it to the method (MltSplatting::MethodDefault): Kelemen
+  // MIS, measured better than expected values at equal time (docs/CHAINS.md); a method without large steps
+  // (veach-mlt) overrides it, and refuses Kelemen MIS (supportsKelemenMis).
+  virtual MltSplatting defaultSplatting() const { return MltSplatting::KelemenMIS; }
+  virtual bool supportsKelemenMis() const { return true; }
   virtual double candidateCost(const RenderSettings& settings) const {
     (void)settings;
     return 1.0;

@@ -145,7 +145,9 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
     m.numbers["kernelS1"] = s.kelemenS1;
     m.numbers["kernelS2"] = s.kelemenS2;
   }
-  m.strings["splatting"] = s.splatting == MltSplatting::KelemenMIS ? "kelemen-mis" : "expected-value";
+  m.strings["splatting"] = s.splatting == MltSplatting::KelemenMIS      ? "kelemen-mis"
+                           : s.splatting == MltSplatting::ExpectedValue ? "expected-value"
+                                                                        : "method-default";  // an unplanned job
   for (const ChainLengthReport& l : r.lengths) {
     const std::string k = std::to_string(l.k);
     m.numbers["b" + k] = l.bk;
@@ -200,8 +202,10 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
     r.settings.kelemenS1 = float(number(m, "kernelS1"));
     r.settings.kelemenS2 = float(number(m, "kernelS2"));
   }
-  if (const auto it = m.strings.find("splatting"); it != m.strings.end() && it->second == "kelemen-mis")
-    r.settings.splatting = MltSplatting::KelemenMIS;
+  if (const auto it = m.strings.find("splatting"); it != m.strings.end())
+    r.settings.splatting = it->second == "kelemen-mis"      ? MltSplatting::KelemenMIS
+                           : it->second == "expected-value" ? MltSplatting::ExpectedValue
+                                                            : MltSplatting::MethodDefault;
   for (const auto& [key, value] : m.numbers) {
     const int k = lengthOfKey(key, "b");
     const std::string ks = std::to_string(k);

@@ -29,7 +29,9 @@ struct IntegratorSettings {
 };
 
 enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s1, s2) or Gaussian (sigma)
-enum class MltSplatting { ExpectedValue, KelemenMIS };
+// MethodDefault: the method's (ChainJobSpec::defaultSplatting: Kelemen MIS; veach-mlt expected values),
+// resolved when the job is planned, and the plan holds the value used.
+enum class MltSplatting { MethodDefault, ExpectedValue, KelemenMIS };
 
 // A method's own parameters: name -> value as text (the method's ParamSpec says how to read it).
 using MethodParams = std::map<std::string, std::string>;
@@ -54,7 +56,7 @@ struct RenderSettings {
   float largeStepProb = -1.0f;
   MutationKernel kernel = MutationKernel::Kelemen;
   float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
-  MltSplatting splatting = MltSplatting::ExpectedValue;
+  MltSplatting splatting = MltSplatting::MethodDefault;
   bool separateDirect = false;                    // render direct light by bdpt; chains do indirect only
   MethodParams params;                            // the method's own parameters (validated by the method)
   double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)

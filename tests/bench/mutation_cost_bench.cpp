@@ -88,7 +88,7 @@ const Bundled& bundled() {
 ChainConfig chainConfig(const JobPlan& plan, int k) {  // as runMarkovChain
   const RenderSettings& s = plan.settings;
   ChainConfig c;
-  c.splatting = s.splatting == MltSplatting::KelemenMIS ? ChainSplatting::KelemenMIS : ChainSplatting::ExpectedValue;
+  c.splatting = s.splatting == MltSplatting::ExpectedValue ? ChainSplatting::ExpectedValue : ChainSplatting::KelemenMIS;
   c.largeStepProb = s.largeStepProb;
   c.b = s.method == "mmlt" ? plan.norm.bk[k] : plan.norm.b;
   return c;

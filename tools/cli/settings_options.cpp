@@ -57,9 +57,8 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
   add_option("--s2", s2_, "Kelemen kernel: largest step (at least --s1)")->check(kUnitStep);
   add_option("--sigma", sigma_, "Gaussian kernel: standard deviation")->check(kUnitStep);
   add_option("--splatting", splatting_,
-             "Markov chain methods: expected-value (Veach: proposal weighted by a, current state by 1 - a) "
-             "or kelemen-mis (Kelemen et al.'s large-step MIS weights)")
-      ->capture_default_str()
+             "Markov chain methods: kelemen-mis (Kelemen et al.'s large-step MIS weights; the default) or "
+             "expected-value (Veach: proposal weighted by a, current state by 1 - a; veach-mlt's only)")
       ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
   add_flag("--separate-direct", separateDirect_,
            "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples; without --spp "
@@ -127,7 +126,9 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.kelemenS1 = s1_;
   s.kelemenS2 = s2_;
   s.gaussianSigma = sigma_;
-  s.splatting = splatting_ == "kelemen-mis" ? MltSplatting::KelemenMIS : MltSplatting::ExpectedValue;
+  s.splatting = splatting_.empty()                 ? MltSplatting::MethodDefault
+                : splatting_ == "kelemen-mis"      ? MltSplatting::KelemenMIS
+                                                   : MltSplatting::ExpectedValue;
   s.separateDirect = separateDirect_;
   // The direct pass without --spp: sized by the plan from the mutations per pixel (directSppFor), also under
   // a time budget; the scene's sampler sample_count is meant for pt and bdpt.

@@ -29,7 +29,7 @@
 // b is 0: no chain to carry the pass), the plan is made again with the pass off and says so.
 // Scenes: area, point and spot lights (path.h: a point or spot light is x_0 of counting measure);
 // directional and environment lights are refused at plan time, naming the light.
-// Not supported: Kelemen MIS splatting (ignored: expected values).
+// Not supported: Kelemen MIS splatting (refused by validation; expected values are veach-mlt's default).
 #pragma once
 #include <string>
 #include <vector>

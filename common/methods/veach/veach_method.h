@@ -36,6 +36,9 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   // ChainJobSpec (the bootstrap and chain allocation of pssmlt-bdpt).
   bool chainsPerLength() const override { return false; }
   bool allowsSeparateDirect() const override { return true; }  // veach_job.h
+  // No large steps (b's samples are separate candidates, veach_job.h): expected values only.
+  MltSplatting defaultSplatting() const override { return MltSplatting::ExpectedValue; }
+  bool supportsKelemenMis() const override { return false; }
   std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
   // A candidate is a bdpt sample (every strategy, ~depth^2 connections) against a mutation that retraces a
