@@ -3,6 +3,7 @@
 #include "proto/sparse_film.h"
 
 #include "common/methods/registry.h"
+#include "common/settings/splatting_name.h"
 
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
@@ -101,9 +102,7 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
     c->set_kelemen_s1(s.kelemenS1);
     c->set_kelemen_s2(s.kelemenS2);
     c->set_gaussian_sigma(s.gaussianSigma);
-    c->set_splatting(s.splatting == MltSplatting::ExpectedValue ? "expected-value"
-                     : s.splatting == MltSplatting::KelemenMIS  ? "kelemen-mis"
-                                                                : "");  // the method's
+    c->set_splatting(splattingName(s.splatting));  // "": the method's
     c->set_separate_direct(s.separateDirect);
     *c->mutable_direct() = samples;
   } else {
@@ -183,11 +182,10 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     s.kelemenS1 = float(c.kelemen_s1());
     s.kelemenS2 = float(c.kelemen_s2());
     s.gaussianSigma = float(c.gaussian_sigma());
-    if (c.splatting().empty()) s.splatting = MltSplatting::MethodDefault;
-    else if (c.splatting() == "expected-value") s.splatting = MltSplatting::ExpectedValue;
-    else if (c.splatting() == "kelemen-mis") s.splatting = MltSplatting::KelemenMIS;
-    else throw WireError("settings.chains.splatting",
-                         fmt::format("unknown '{}' (expected-value|kelemen-mis)", c.splatting()));
+    const std::optional<MltSplatting> splatting = splattingFromName(c.splatting());
+    if (!splatting)
+      throw WireError("settings.chains.splatting", fmt::format("unknown '{}' (expected-value|kelemen-mis)", c.splatting()));
+    s.splatting = *splatting;
     s.separateDirect = c.separate_direct();
   }
   if (p.params_size() > 256) throw WireError("settings.params", "more than 256 parameters");

@@ -8,6 +8,7 @@
 #include "common/job/mlt_job.h"
 #include "common/methods/pss_method.h"
 #include "common/methods/registry.h"
+#include "common/settings/splatting_name.h"
 
 namespace mlt {
 
@@ -145,9 +146,8 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
     m.numbers["kernelS1"] = s.kelemenS1;
     m.numbers["kernelS2"] = s.kelemenS2;
   }
-  m.strings["splatting"] = s.splatting == MltSplatting::KelemenMIS      ? "kelemen-mis"
-                           : s.splatting == MltSplatting::ExpectedValue ? "expected-value"
-                                                                        : "method-default";  // an unplanned job
+  const std::string splatting = splattingName(s.splatting);
+  m.strings["splatting"] = splatting.empty() ? "method-default" : splatting;  // empty: an unplanned job
   for (const ChainLengthReport& l : r.lengths) {
     const std::string k = std::to_string(l.k);
     m.numbers["b" + k] = l.bk;
@@ -203,9 +203,7 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
     r.settings.kelemenS2 = float(number(m, "kernelS2"));
   }
   if (const auto it = m.strings.find("splatting"); it != m.strings.end())
-    r.settings.splatting = it->second == "kelemen-mis"      ? MltSplatting::KelemenMIS
-                           : it->second == "expected-value" ? MltSplatting::ExpectedValue
-                                                            : MltSplatting::MethodDefault;
+    r.settings.splatting = splattingFromName(it->second).value_or(MltSplatting::MethodDefault);
   for (const auto& [key, value] : m.numbers) {
     const int k = lengthOfKey(key, "b");
     const std::string ks = std::to_string(k);

@@ -2,6 +2,7 @@
 // `mltfarm render` always had; `submit` inherits them.
 #include "tools/cli/settings_options.h"
 
+#include "common/settings/splatting_name.h"
 #include "proto/convert.h"
 
 #include <fmt/format.h>
@@ -126,9 +127,7 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.kelemenS1 = s1_;
   s.kelemenS2 = s2_;
   s.gaussianSigma = sigma_;
-  s.splatting = splatting_.empty()                 ? MltSplatting::MethodDefault
-                : splatting_ == "kelemen-mis"      ? MltSplatting::KelemenMIS
-                                                   : MltSplatting::ExpectedValue;
+  s.splatting = splattingFromName(splatting_).value();  // empty or one of the names --splatting accepts
   s.separateDirect = separateDirect_;
   // The direct pass without --spp: sized by the plan from the mutations per pixel (directSppFor), also under
   // a time budget; the scene's sampler sample_count is meant for pt and bdpt.
