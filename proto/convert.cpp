@@ -3,6 +3,7 @@
 #include "proto/sparse_film.h"
 
 #include "common/methods/registry.h"
+#include "common/settings/direct_light_name.h"
 #include "common/settings/splatting_name.h"
 
 #include <google/protobuf/io/coded_stream.h>
@@ -103,7 +104,8 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
     c->set_kelemen_s2(s.kelemenS2);
     c->set_gaussian_sigma(s.gaussianSigma);
     c->set_splatting(splattingName(s.splatting));  // "": the method's
-    c->set_separate_direct(s.separateDirect);
+    c->set_direct_light(directLightName(s.directLight));
+    c->set_separate_direct(separatesDirect(s));  // for readers before direct_light
     *c->mutable_direct() = samples;
   } else {
     *p.mutable_samples() = samples;
@@ -154,10 +156,19 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     throw WireError("settings.samples", fmt::format("method {} needs sample settings", s.method));
   const v1::SampleSettings& samples = chainMethod ? p.chains().direct() : p.samples();
   const std::string sp = chainMethod ? "settings.chains.direct" : "settings.samples";
+  if (chainMethod) {
+    // "": a writer before direct_light, whose separate_direct said separate or not (auto is new).
+    const std::string& name = p.chains().direct_light();
+    const std::optional<DirectLight> d =
+        name.empty() ? std::optional(p.chains().separate_direct() ? DirectLight::Separate : DirectLight::Auto)
+                     : directLightFromName(name);
+    if (!d) throw WireError("settings.chains.direct_light", fmt::format("unknown '{}' (auto|chains|separate)", name));
+    s.directLight = *d;
+  }
   if (!chainMethod || samples.spp() != 0) {
     requireRange((sp + ".spp").c_str(), samples.spp(), 1, kMaxSpp);
     s.spp = int(samples.spp());
-  } else if (p.chains().separate_direct()) {
+  } else if (separatesDirect(s)) {
     s.spp = 0;  // the direct pass sized by the plan (directSppFor)
   }
   requireRange((sp + ".samples_per_unit").c_str(), samples.samples_per_unit(), 0, kMaxSpp);
@@ -186,7 +197,6 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     if (!splatting)
       throw WireError("settings.chains.splatting", fmt::format("unknown '{}' (expected-value|kelemen-mis)", c.splatting()));
     s.splatting = *splatting;
-    s.separateDirect = c.separate_direct();
   }
   if (p.params_size() > 256) throw WireError("settings.params", "more than 256 parameters");
   for (const auto& [name, value] : p.params()) {
@@ -245,6 +255,10 @@ v1::JobPlan toProto(const JobPlan& plan) {
   n->set_total_mutations(plan.norm.totalMutations);
   n->set_bootstrap_samples(plan.norm.bootstrapSamples);
   n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
+  if (plan.norm.directShare >= 0) {
+    n->set_direct_share(plan.norm.directShare);
+    n->set_direct_cv(plan.norm.directCv);
+  }
   for (const BootstrapEstimate& e : plan.norm.bootstrapB) {
     auto* p = n->add_bootstrap_b();
     p->set_n(e.n);
@@ -285,6 +299,14 @@ JobPlan fromProto(const v1::JobPlan& p) {
   plan.norm.totalMutations = n.total_mutations();
   plan.norm.bootstrapSamples = n.bootstrap_samples();
   plan.norm.bootstrapSeconds = n.bootstrap_seconds();
+  if (n.has_direct_share()) {
+    if (!(n.direct_share() >= 0 && n.direct_share() <= 1))
+      throw WireError("plan.norm.direct_share", fmt::format("invalid value {}", n.direct_share()));
+    if (!(n.direct_cv() >= 0 && std::isfinite(n.direct_cv())))
+      throw WireError("plan.norm.direct_cv", fmt::format("invalid value {}", n.direct_cv()));
+    plan.norm.directShare = n.direct_share();
+    plan.norm.directCv = n.direct_cv();
+  }
   for (const auto& e : n.bootstrap_b()) {
     for (double v : {e.b(), e.std_err(), e.sample_var(), e.bulk_b(), e.bulk_std_err(), e.bulk_var(), e.excess_mean_sq()})
       if (!(std::isfinite(v) && v >= 0)) throw WireError("plan.norm.bootstrap_b", fmt::format("invalid value {}", v));

@@ -101,7 +101,7 @@ TEST(CliSettings, RenderAndSubmitDeclareTheSameSettingOptionsOnce) {
   for (const OptionShape& o : r) names.insert(o.names);
   for (const char* expected :
        {"-m,--method", "--spp", "--samples-per-unit", "--mutations-per-pixel", "--chains", "--bootstrap",
-        "--large-step", "--kernel", "--s1", "--s2", "--sigma", "--splatting", "--separate-direct", "--max-depth",
+        "--large-step", "--kernel", "--s1", "--s2", "--sigma", "--splatting", "--direct-light", "--separate-direct", "--max-depth",
         "--rr-depth", "--seed", "--width", "--height", "-D,--define"})
     EXPECT_TRUE(names.count(expected)) << expected << " is not a shared setting option";
   // ... and one option per registered method parameter (--<name>, e.g. veach-mlt's --veach-lens).
@@ -111,7 +111,7 @@ TEST(CliSettings, RenderAndSubmitDeclareTheSameSettingOptionsOnce) {
       params.insert(p.name);
       EXPECT_TRUE(names.count("--" + p.name)) << "--" << p.name << " is not a shared setting option";
     }
-  EXPECT_EQ(names.size(), 19u + params.size());
+  EXPECT_EQ(names.size(), 20u + params.size());
   // Nothing declared twice: no option of the command itself has a name of a setting option.
   for (const Command* c : {&render, &submit})
     for (const CLI::Option* opt : c->sub->get_options()) {
@@ -136,7 +136,7 @@ TEST(CliSettings, SameArgumentsGiveTheSameSettings) {
   EXPECT_EQ(v.kernel, MutationKernel::Gaussian);
   EXPECT_EQ(v.gaussianSigma, 0.02f);
   EXPECT_EQ(v.splatting, MltSplatting::KelemenMIS);
-  EXPECT_TRUE(v.separateDirect);
+  EXPECT_EQ(v.directLight, DirectLight::Separate);
   EXPECT_EQ(v.seed, 9u);
   EXPECT_EQ(v.width, 40);
   EXPECT_EQ(v.height, 30);
@@ -194,6 +194,46 @@ std::string errorOf(const std::string& command, const std::vector<std::string>& 
     return e.what();
   }
   return "";
+}
+
+// --direct-light: auto by default (the plan's pilot decides), chains or separate as typed, and the wire
+// carries each by name; --separate-direct is --direct-light separate, and the two together are refused.
+// A writer from before direct_light (only separate_direct) still reads as it meant: separate, or no
+// choice made (now auto); an unknown name is a WireError naming the field.
+TEST(CliSettings, DirectLightIsAutoUnlessGivenAndTravelsByName) {
+  EXPECT_EQ(parseSubmit({"-m", "mmlt"}).settings.directLight, DirectLight::Auto);
+  for (const auto& [name, value] : {std::pair<const char*, DirectLight>{"auto", DirectLight::Auto},
+                                    {"chains", DirectLight::Chains},
+                                    {"separate", DirectLight::Separate}}) {
+    const std::vector<std::string> args{"-m", "veach-mlt", "--direct-light", name};
+    const CommandLineSettings r = parseRender(args), s = parseSubmit(args);
+    expectSame(r, s);
+    EXPECT_EQ(s.settings.directLight, value) << name;
+    EXPECT_EQ(s.settings.spp, value == DirectLight::Separate ? 0 : RenderSettings{}.spp) << name;
+    const v1::RenderSettings wire = onTheWire(s);
+    EXPECT_EQ(wire.chains().direct_light(), name);
+    EXPECT_EQ(wire.chains().separate_direct(), value == DirectLight::Separate);  // for readers before direct_light
+    EXPECT_EQ(wire::fromProto(wire).settings.directLight, value) << name;
+  }
+  expectSame(parseSubmit({"-m", "mmlt", "--separate-direct"}), parseSubmit({"-m", "mmlt", "--direct-light", "separate"}));
+  EXPECT_NE(errorOf("submit", {"-m", "mmlt", "--separate-direct", "--direct-light", "chains"}), "");
+  EXPECT_NE(errorOf("submit", {"--direct-light", "bdpt"}).find("--direct-light"), std::string::npos);
+
+  v1::RenderSettings old = onTheWire(parseSubmit({"-m", "mmlt"}));
+  old.mutable_chains()->clear_direct_light();
+  old.mutable_chains()->set_separate_direct(true);
+  old.mutable_chains()->mutable_direct()->set_spp(0);  // what such a writer sent for --separate-direct
+  EXPECT_EQ(wire::fromProto(old).settings.directLight, DirectLight::Separate);
+  EXPECT_EQ(wire::fromProto(old).settings.spp, 0);  // sized by the plan, as it was
+  old.mutable_chains()->set_separate_direct(false);
+  EXPECT_EQ(wire::fromProto(old).settings.directLight, DirectLight::Auto);
+  old.mutable_chains()->set_direct_light("sometimes");
+  try {
+    wire::fromProto(old);
+    ADD_FAILURE() << "an unknown direct_light was accepted";
+  } catch (const wire::WireError& e) {
+    EXPECT_NE(std::string(e.what()).find("settings.chains.direct_light"), std::string::npos) << e.what();
+  }
 }
 
 TEST(CliSettings, BadValuesAreErrorsNamingTheOption) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/io/exr_io.h"
+#include "common/job/direct_light_rule.h"
 
 namespace mlt {
 namespace {
@@ -212,7 +213,23 @@ bool sameBits(const ExrImage& a, const ExrImage& b) {
 }
 
 const std::string kSmallMmlt = " --method mmlt --width 32 --height 32 --max-depth 4 --bootstrap 2000 --seed 5 "
-                               "--threads 2 --in-process ";
+                               "--threads 2 --in-process --direct-light chains ";
+
+// Without --direct-light the plan's pilot chooses (common/job/direct_light_rule.h), and the log and the
+// image say what it chose and why: on the Cornell box, a bdpt pass for the direct light.
+TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
+  const fs::path out = tempDir() / "auto.exr";
+  const RunResult r = run("render " + kScenes + "cornell-box.xml --method mmlt --width 64 --height 64 --max-depth 4 "
+                          "--mutations-per-pixel 2 --seed 3 --threads 2 --in-process -o " + out.string());
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("mmlt: direct light by a bdpt pass \\(--direct-light separate\\): "
+                                                     "the pilot's [0-9]+ bdpt samples")))
+      << r.output;
+  const auto& n = readExr(out.string()).metadata.numbers;
+  EXPECT_EQ(n.at("separateDirect"), 1.0);
+  EXPECT_GE(n.at("directLightShare"), kDirectMinShare);
+  EXPECT_LE(n.at("directLightCv"), kDirectMaxCv);
+}
 
 TEST_F(Cli, MarkovChainRenderPrintsBAcceptanceAndMutationsPerSecond) {
   const fs::path out = tempDir() / "summary.exr";

@@ -320,10 +320,14 @@ TEST(EvalHarness, MethodSpecs) {
   const MethodSpec sd = parseMethodSpec("mmlt+separate-direct");
   EXPECT_EQ(sd.method, "mmlt");
   EXPECT_EQ(sd.label, "mmlt+separate-direct");
-  EXPECT_TRUE(sd.separateDirect);
-  EXPECT_FALSE(parseMethodSpec("mmlt").separateDirect);
-  EXPECT_TRUE(parseMethodSpec("sd=pssmlt-bdpt+separate-direct*2").separateDirect);
+  EXPECT_EQ(sd.directLight, DirectLight::Separate);
+  EXPECT_EQ(parseMethodSpec("mmlt").directLight, DirectLight::Auto);  // the plan decides
+  EXPECT_EQ(parseMethodSpec("sd=pssmlt-bdpt+separate-direct*2").directLight, DirectLight::Separate);
+  const MethodSpec chains = parseMethodSpec("veach-mlt+direct-in-chains");
+  EXPECT_EQ(chains.method, "veach-mlt");
+  EXPECT_EQ(chains.directLight, DirectLight::Chains);
   EXPECT_THROW(parseMethodSpec("pt+separate-direct"), std::invalid_argument);  // pt has no direct pass apart
+  EXPECT_THROW(parseMethodSpec("pssmlt+direct-in-chains"), std::invalid_argument);
   EXPECT_THROW(parseMethodSpec("pssmlt+separate-direct"), std::invalid_argument);  // its splats carry no length
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 0, 1));
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 1, 0));

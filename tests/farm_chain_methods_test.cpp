@@ -116,7 +116,7 @@ TEST(FarmChainMethods, RjmltOnTwoWorkersMatchesTheInProcessRenderAndCarriesItsMo
   // Technique changes more often than the default 5 %, so that they are many even in a small job.
   const Rendered r = renderBothWays(cornellBox(),
                                     "--method rjmlt --seed 7 --width 32 --height 32 --mutations-per-pixel 8 --chains 24 "
-                                    "--bootstrap 4000 --max-depth 4 --large-step 0.1 --technique-step 0.2",
+                                    "--bootstrap 4000 --max-depth 4 --large-step 0.1 --technique-step 0.2 --direct-light chains",
                                     "rjmlt");
   expectSameImageAndStatistics(r, "rjmlt");
   const ExrImage& img = r.farm;

@@ -45,7 +45,7 @@ TEST(FarmSubmitSettings, KernelSplattingAndSeparateDirectReachThePlanAndMatchRen
     EXPECT_EQ(s.kernel, MutationKernel::Gaussian);
     EXPECT_EQ(s.gaussianSigma, 0.02f);
     EXPECT_EQ(s.splatting, MltSplatting::ExpectedValue);  // not the default (Kelemen MIS)
-    EXPECT_TRUE(s.separateDirect);
+    EXPECT_EQ(s.directLight, DirectLight::Separate);
   }
   EXPECT_GT(partials, 0u);
   const ExrImage submitted = readExr(farmExr);

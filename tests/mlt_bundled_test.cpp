@@ -39,6 +39,7 @@ TEST_P(MltBundled, AgreesWithBdpt) {
   desc.camera.width = desc.camera.height = kRes;
   const auto scene = RenderScene::build(desc);
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.method = c.method;
   s.width = s.height = kRes;
   s.integrator.maxDepth = desc.maxDepth.value_or(5);

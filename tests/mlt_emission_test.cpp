@@ -42,6 +42,7 @@ const RenderScene& cornell() {
 
 RenderSettings settings(const char* method, uint64_t seed) {
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.method = method;
   s.seed = seed;
   s.width = kW;

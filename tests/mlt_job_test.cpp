@@ -29,6 +29,7 @@ const RenderScene& cornell() {
 
 RenderSettings settingsFor(std::string m, uint64_t seed) {
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.method = m;
   s.seed = seed;
   s.integrator.maxDepth = 4;
@@ -105,7 +106,7 @@ TEST(MltJob, AnyGroupingOfUnitsDevelopsToIdenticalBytes) {
   for (std::string m : kMethods) {
     RenderSettings s = settingsFor(m, 7);
     s.mutationsPerPixel = 200;  // many splats per pixel: sums whose rounding depends on the grouping
-    if (m == "mmlt") s.separateDirect = true;  // include direct-pass units in the merge
+    if (m == "mmlt") s.directLight = DirectLight::Separate;  // include direct-pass units in the merge
     const JobPlan plan = planJob(cornell(), s);
     const std::vector<PartialResult> parts = runAll(cornell(), plan);
     PartialResult sequential;
@@ -170,7 +171,7 @@ TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
   EXPECT_EQ(directSppFor(100), int(std::ceil(kDirectSppPerMutation * 100)));
   for (double mpp : {8.0, 30.0}) {
     RenderSettings s = settingsFor("mmlt", 3);
-    s.separateDirect = true;
+    s.directLight = DirectLight::Separate;
     s.mutationsPerPixel = mpp;
     s.spp = 0;
     const JobPlan automatic = planJob(cornell(), s);
@@ -194,7 +195,7 @@ TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
     EXPECT_TRUE(sameBytes(developImage(automatic, ra), developImage(given, rb))) << mpp;
   }
   RenderSettings bad = settingsFor("mmlt", 3);
-  bad.separateDirect = true;
+  bad.directLight = DirectLight::Separate;
   bad.spp = -1;
   EXPECT_THROW(planJob(cornell(), bad), std::invalid_argument);
 }

@@ -33,6 +33,7 @@ const RenderScene& cornell() {
 
 RenderSettings settingsFor(std::string m, uint64_t seed, double mpp) {
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.method = m;
   s.seed = seed;
   s.integrator.maxDepth = 4;

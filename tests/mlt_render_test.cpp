@@ -51,6 +51,7 @@ const test::ImageStats& bdptReference() {
 
 RenderSettings cornellSettings(std::string m) {
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.method = m;
   s.integrator.maxDepth = 5;
   s.mutationsPerPixel = 32;
@@ -97,7 +98,7 @@ TEST(MltRender, ExpectedValueSplattingAgreesWithBdpt) {
 
 TEST(MltRender, SeparateDirectAgreesWithBdpt) {
   RenderSettings s = cornellSettings("mmlt");
-  s.separateDirect = true;
+  s.directLight = DirectLight::Separate;
   s.spp = 64;  // the direct pass (same seeds in every run would share its noise otherwise)
   expectAgreesWithBdpt(s, "mmlt, direct by bdpt");
 }
@@ -126,6 +127,7 @@ TEST(MltRender, MmltWithUnlimitedDepthMatchesTheInfiniteSeries) {
   const float Le = 1.0f, rho = 0.5f;
   const auto scene = RenderScene::build(test::furnaceSphere(Le, rho, 8, 8, 8));
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // the bootstrap's blocks of lengths from 1 on
   s.method = "mmlt";
   s.integrator.maxDepth = -1;
   s.mutationsPerPixel = 768;  // at 512 (expected values' size) Kelemen MIS's error was just above the resolution below

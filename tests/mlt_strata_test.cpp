@@ -122,6 +122,7 @@ TEST(BStrata, ChainUnitsKeepTheirLargeStepsPerPixelAndBIsDevelopedWithThem) {
   for (std::string method : {"pssmlt-bdpt", "pssmlt", "mmlt", "rjmlt"}) {
     const bool stratified = method == "pssmlt-bdpt" || method == "pssmlt";
     RenderSettings s;
+    s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
     s.method = method;
     s.seed = 23;
     s.integrator.maxDepth = 4;

@@ -431,6 +431,7 @@ TEST(PbrtLoader, MarkovChainMethodsOnThePbrtTwinAgreeWithTheMitsubaTwin) {
   const test::ImageStats ref = test::estimateImage(*bdpt, 24, 24, 777, 24 * 24 * 1024, 3, 3);
   for (const std::string m : {"pssmlt", "pssmlt-bdpt", "mmlt"}) {
     RenderSettings s;
+    s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
     s.method = m;
     s.width = s.height = 24;
     s.integrator = is;

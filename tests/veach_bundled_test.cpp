@@ -40,6 +40,7 @@ TEST_P(VeachBundled, AgreesWithBdpt) {
   desc.camera.width = desc.camera.height = kRes;
   const auto scene = RenderScene::build(desc);
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.width = s.height = kRes;
   s.integrator.maxDepth = c.maxDepth ? c.maxDepth : desc.maxDepth.value_or(5);
   s.integrator.rrDepth = desc.rrDepth.value_or(5);

@@ -25,6 +25,7 @@ namespace {
 
 RenderSettings smallSettings() {
   RenderSettings s;
+  s.directLight = DirectLight::Chains;  // chains over every length (the automatic choice: direct_light_rule_test)
   s.seed = 21;
   s.width = s.height = 16;
   s.integrator.maxDepth = 5;
@@ -204,7 +205,7 @@ TEST(VeachJob, ChainsRefineBWithIndependentCandidates) {
 TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   const auto box = RenderScene::build(test::smallCornellBox(16, 16));
   RenderSettings s = smallSettings();
-  s.separateDirect = true;
+  s.directLight = DirectLight::Separate;
   s.spp = -1;  // not a size (0 is: the plan sizes the direct pass, directSppFor)
   EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
   s.spp = 0;

@@ -44,7 +44,7 @@ RenderSettings settings(bool separateDirect) {
   s.mutationsPerPixel = 16;
   s.bootstrapSamples = 20000;
   s.chains = 16;
-  s.separateDirect = separateDirect;
+  s.directLight = separateDirect ? DirectLight::Separate : DirectLight::Chains;
   s.spp = 16;  // the direct pass
   return s;
 }

@@ -14,7 +14,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/job/direct_light_rule.h"
 #include "common/job/sample_job.h"
+#include "common/settings/direct_light_name.h"
 #include "common/mlt/bootstrap.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/develop.h"
@@ -50,7 +52,7 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
     throw std::invalid_argument("settings: " + spec.name() + " needs a max depth >= 1 or -1 (unlimited), got " +
                                 std::to_string(s.integrator.maxDepth));
   // Unlimited: the first block; the bootstrap adds blocks while they carry light (bootstrapMarkovChainJob).
-  const int kMin = chainMinLength(s.separateDirect);
+  const int kMin = chainMinLength(separatesDirect(s));
   const int kMax = s.integrator.maxDepth < 0 ? kMin + kUnlimitedLengthBlock - 1 : s.integrator.maxDepth;
   std::vector<int> lengths;
   for (int k = kMin; k <= kMax; ++k) lengths.push_back(k);
@@ -65,7 +67,7 @@ int directSppFor(double mutationsPerPixel) {
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
   if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
   if (s.splatting == MltSplatting::MethodDefault) s.splatting = spec.defaultSplatting();
-  if (s.separateDirect && s.spp == 0) s.spp = directSppFor(s.mutationsPerPixel);
+  if (separatesDirect(s) && s.spp == 0) s.spp = directSppFor(s.mutationsPerPixel);
   return s;
 }
 
@@ -142,7 +144,7 @@ void checkBootstrapFits(const ChainJobSpec& spec, const RenderSettings& b, const
   if (b.integrator.rrDepth != s.integrator.rrDepth) differs("rr depth", b.integrator.rrDepth, s.integrator.rrDepth);
   if (b.integrator.heuristic != s.integrator.heuristic)
     differs("MIS heuristic", int(b.integrator.heuristic), int(s.integrator.heuristic));
-  if (b.separateDirect != s.separateDirect) differs("separateDirect", b.separateDirect, s.separateDirect);
+  if (b.directLight != s.directLight) differs("directLight", directLightName(b.directLight), directLightName(s.directLight));
   if (bootstrapPerLength(spec, b) != bootstrapPerLength(spec, s))
     differs("bootstrap samples per length", bootstrapPerLength(spec, b), bootstrapPerLength(spec, s));
 }
@@ -173,35 +175,63 @@ void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings&
 }
 
 void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
-  if (!s.separateDirect) return;
+  if (!separatesDirect(s)) return;
   if (!spec.allowsSeparateDirect())
     throw std::invalid_argument("settings: " + spec.name() +
-                                " cannot leave out the direct light (separateDirect): its splats do not carry the path length");
+                                " cannot leave out the direct light (direct light separate): its splats do not carry the path length");
   if (s.spp < 0)
-    throw std::invalid_argument("settings: the direct pass (separateDirect) needs spp >= 1 (or 0: sized by the "
+    throw std::invalid_argument("settings: the direct pass (direct light separate) needs spp >= 1 (or 0: sized by the "
                                 "mutations per pixel), got " + std::to_string(s.spp));
 }
 
 namespace {
 // Whether `earlier`'s b_1 camera rays are what emissionEstimate would compute for `s`: it reads the
 // seed, the film and the integrator settings (emission_estimate.h).
-bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s) {
-  if (!earlier || !earlier->emission) return false;
-  const RenderSettings& e = earlier->settings;
+// The same reads the direct-light pilot makes (direct_light_rule.h).
+bool sameRaysInputs(const RenderSettings& e, const RenderSettings& s) {
   return e.seed == s.seed && e.width == s.width && e.height == s.height && e.integrator == s.integrator;
+}
+bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s) {
+  return earlier && earlier->emission && sameRaysInputs(earlier->settings, s);
 }
 }  // namespace
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
                                              const RenderSettings& settings, const MarkovChainBootstrap* earlier) {
-  const RenderSettings& s = settings;
+  MarkovChainBootstrap out;
+  // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
+  // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.
+  RenderSettings resolved = settings;
+  if (resolved.directLight == DirectLight::Auto) {
+    if (!spec.allowsSeparateDirect()) {
+      resolved.directLight = DirectLight::Chains;
+    } else {
+      if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings)) {
+        out.pilot = earlier->pilot;
+        out.pilot->seconds = 0;  // not run again
+      } else {
+        out.pilot = directLightPilot(scene, settings);
+      }
+      const DirectLightPilot& p = *out.pilot;
+      resolved.directLight = p.separate ? DirectLight::Separate : DirectLight::Chains;
+      if (p.separate) resolved.spp = 0;  // the automatic pass is sized by the plan (directSppFor)
+      spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
+                   "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
+                   spec.name(), p.separate ? "by a bdpt pass (--direct-light separate)" : "in the chains (--direct-light chains)",
+                   p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
+                   p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
+    }
+  }
+  const RenderSettings& s = resolved;
   validateMarkovChainSettings(spec, s);
 
-  MarkovChainBootstrap out;
   out.settings = s;
   out.settings.bootstrapSamples = int(bootstrapPerLength(spec, s));
   const std::vector<int> lengths = chainPathLengths(spec, s);
-  if (lengths.empty()) return out;  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
+  if (lengths.empty()) {  // mmlt, separateDirect, max depth <= 2: the direct pass renders everything
+    if (out.pilot) out.result.seconds = out.pilot->seconds;
+    return out;
+  }
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
@@ -248,6 +278,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   if (raysForLengthOne) bc.seedOnlyLengths = {1};
   if (e1 && bc.totalCandidates > 0) bc.spentCost = double(e1->rays) * kEmissionRayCost;  // the rays share the budget
   out.result = runBinnedBootstrap(bc, candidates);
+  if (out.pilot) out.result.seconds += out.pilot->seconds;  // the pilot is part of the bootstrap's cost
   if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
     LengthBootstrap& l1 = out.result.lengths.front();
@@ -335,7 +366,12 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*/, const RenderSettings& settings,
                            const MarkovChainBootstrap& bootstrap) {
-  const RenderSettings s = resolveChainSettings(spec, settings);  // the plan holds the values used
+  RenderSettings chosen = settings;
+  if (chosen.directLight == DirectLight::Auto) {  // as the bootstrap decided (bootstrapMarkovChainJob)
+    chosen.directLight = bootstrap.settings.directLight;
+    if (separatesDirect(chosen)) chosen.spp = 0;  // the automatic pass is sized by the plan
+  }
+  const RenderSettings s = resolveChainSettings(spec, chosen);  // the plan holds the values used
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
@@ -353,6 +389,10 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   norm.bStdErr = boot.bStdErr;
   norm.bootstrapSamples = boot.candidates;
   norm.bootstrapSeconds = boot.seconds;
+  if (bootstrap.pilot) {
+    norm.directShare = bootstrap.pilot->share;
+    norm.directCv = bootstrap.pilot->cv;
+  }
   norm.totalMutations = boot.b > 0 ? M : 0;
 
   // ---- chain allocation: mutations M_k and chains C_k by mutationWeights (common/mlt/allocation.h; the plain rule,
@@ -398,7 +438,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   plan.settings.chains = static_cast<int>(index);
 
   // ---- direct illumination pass (separateDirect): bdpt sample batches after the chains ----
-  if (s.separateDirect) {
+  if (separatesDirect(s)) {
     JobPlan d = planSampleJob(directPlan(plan).settings);
     for (WorkUnit u : d.units) {
       u.index = index++;
@@ -411,13 +451,13 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
                "refined as the chains run",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
-               s.separateDirect ? ", direct light by bdpt" : "");
+               separatesDirect(s) ? ", direct light by bdpt" : "");
   return plan;
 }
 
 PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit) {
   if (!isDirectUnit(unit)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is not a sample batch of the direct pass");
-  if (!plan.settings.separateDirect) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
+  if (!separatesDirect(plan.settings)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
   const JobPlan d = directPlan(plan);
   const auto evaluator = makeEvaluator(scene, "bdpt", d.settings.integrator);
   PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N

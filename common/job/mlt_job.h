@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/job/direct_light_rule.h"
 #include "common/job/emission_estimate.h"
 #include "common/job/job_types.h"
 #include "common/mlt/allocation.h"
@@ -75,19 +76,23 @@ class ChainJobSpec {
 int chainMinLength(bool separateDirect);
 
 // The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
-// method, width/height, integrator, separateDirect, bootstrapSamples resolved by bootstrapPerLength).
+// method, width/height, integrator, directLight (Auto resolved by the pilot), bootstrapSamples resolved by
+// bootstrapPerLength).
 // The chain count, the mutation kernel and the large-step probability do not enter it, so one bootstrap
 // serves plans with any of those (a time-budgeted render plans twice from one bootstrap, with its
 // bootstrapSamples resolved first; see render_local.cpp).
 struct MarkovChainBootstrap {
   // (Plans reuse a bootstrap of the same method only: checkBootstrapFits compares settings.method.)
-  RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples resolved)
+  RenderSettings settings;  // the settings it was computed with (width/height, bootstrapSamples, directLight resolved)
   BootstrapResult result;   // result.seconds includes raySeconds
   double raySeconds = 0;    // of those, b_1's camera rays (emission_estimate.h): a cost that does not grow with the candidates
   // mmlt, rjmlt: those rays' estimate. A pure function of the scene, the seed, the film and the integrator
   // settings, so a second bootstrap of the same job (a --time budget's final one after its probe) takes it
   // instead of tracing the rays again (bootstrapMarkovChainJob's `earlier`).
   std::optional<EmissionEstimate> emission;
+  // DirectLight::Auto: the pilot that chose settings.directLight (direct_light_rule.h); also a pure function
+  // of the scene, the seed, the film and the integrator settings, so a second bootstrap takes it.
+  std::optional<DirectLightPilot> pilot;
 };
 
 // Bootstrap sizing. The bootstrap finds start states, allocates chains to path lengths and gives the

@@ -63,6 +63,8 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.bStdErr = refined.total.stdErr;
   r.bBootstrap = norm.b;
   r.bBootstrapStdErr = norm.bStdErr;
+  r.directShare = norm.directShare;
+  r.directCv = norm.directCv;
   r.bootstrapSamples = norm.bootstrapSamples;
   for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;  // the independent proposals
   r.bSamples += norm.bootstrapSamples;
@@ -96,7 +98,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   if (method && method->chainsPerLength()) {
     const auto& proposed = merged.stats.proposedPerLength;
     const auto& accepted = merged.stats.acceptedPerLength;
-    for (int k = chainMinLength(s.separateDirect); k < int(norm.bk.size()); ++k) {
+    for (int k = chainMinLength(separatesDirect(s)); k < int(norm.bk.size()); ++k) {
       ChainLengthReport l;
       l.k = k;
       l.bk = size_t(k) < refined.perSlot.size() ? refined.perSlot[size_t(k)].b : 0.0;
@@ -138,7 +140,11 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   if (!r.kinds.empty()) m.strings["mutationKinds"] = kindList;
   const RenderSettings& s = r.settings;
   m.numbers["largeStepProb"] = s.largeStepProb;
-  m.numbers["separateDirect"] = s.separateDirect ? 1 : 0;
+  m.numbers["separateDirect"] = separatesDirect(s) ? 1 : 0;
+  if (r.directShare >= 0) {  // the plan chose it (--direct-light auto): what the pilot measured
+    m.numbers["directLightShare"] = r.directShare;
+    m.numbers["directLightCv"] = r.directCv;
+  }
   m.strings["kernel"] = s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen";
   if (s.kernel == MutationKernel::Gaussian) {
     m.numbers["kernelSigma"] = s.gaussianSigma;
@@ -176,6 +182,10 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.bootstrapSamples = uint64_t(number(m, "bootstrapSamples"));
   r.bBootstrap = number(m, "bBootstrap");
   r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
+  if (m.numbers.count("directLightShare")) {
+    r.directShare = number(m, "directLightShare");
+    r.directCv = number(m, "directLightCv");
+  }
   r.bSamples = uint64_t(number(m, "bSamples"));
   r.settings.bootstrapSamples = int(number(m, "bootstrapPerLength"));
   r.chains = uint64_t(number(m, "chains"));
@@ -194,7 +204,7 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
     at = comma + 1;
   }
   if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
-  r.settings.separateDirect = number(m, "separateDirect") != 0;
+  r.settings.directLight = number(m, "separateDirect") != 0 ? DirectLight::Separate : DirectLight::Chains;
   if (const auto it = m.strings.find("kernel"); it != m.strings.end() && it->second == "gaussian") {
     r.settings.kernel = MutationKernel::Gaussian;
     r.settings.gaussianSigma = float(number(m, "kernelSigma"));

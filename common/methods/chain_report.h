@@ -9,7 +9,8 @@
 //   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
-//   largeStepProb, separateDirect (0/1), kernelS1 + kernelS2 or kernelSigma;
+//   largeStepProb, separateDirect (0/1: the plan's choice), with --direct-light auto the pilot's
+//   directLightShare and directLightCv (common/job/direct_light_rule.h), kernelS1 + kernelS2 or kernelSigma;
 //   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
 // Wall-clock keys, written only where the image may depend on the run (`mltfarm render --in-process`, by
 // addMoveSecondsMetadata; never by the farm, whose images are byte-identical from run to run): per kind
@@ -51,6 +52,7 @@ struct ChainReport {
   std::string method;
   double b = 0, bStdErr = 0;                  // as developed: bootstrap + large steps (develop.h (D3))
   double bBootstrap = 0, bBootstrapStdErr = 0;  // the bootstrap's alone (it allocated the chains)
+  double directShare = -1, directCv = -1;       // the direct-light pilot's (Normalization); -1: none ran
   uint64_t bootstrapSamples = 0;              // bootstrap candidates (all lengths)
   uint64_t bSamples = 0;                      // samples b was pooled from (candidates + large steps)
   uint64_t chains = 0, mutations = 0;

@@ -6,9 +6,9 @@
 // proto/mltfarm.proto):
 //   - common: method, seed, film size, integrator (max depth, Russian roulette, MIS heuristic);
 //   - sample batches (family Samples: pt, lt, bdpt; also the direct pass of a chain method with
-//     separateDirect): spp, samplesPerUnit;
+//     directLight Separate): spp, samplesPerUnit;
 //   - Markov chains (family MarkovChain): mutations, chains, bootstrap, the Kelemen sample source's kernel,
-//     splatting, separateDirect;
+//     splatting, directLight;
 //   - `params`: a method's own named parameters (e.g. a mutation's probability), declared by the method
 //     (RenderMethod::params) with their defaults, parsed and validated by it. A new method adds
 //     parameters here without touching the wire, the CLI parser or this file.
@@ -32,6 +32,10 @@ enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s
 // MethodDefault: the method's (ChainJobSpec::defaultSplatting: Kelemen MIS; veach-mlt expected values),
 // resolved when the job is planned, and the plan holds the value used.
 enum class MltSplatting { MethodDefault, ExpectedValue, KelemenMIS };
+// How a chain method renders paths of at most two segments (the direct light): Auto, the plan decides
+// from a pilot (common/job/direct_light_rule.h) and holds the value used; Chains, the chains carry them
+// with the rest; Separate, a bdpt pass renders them and the chains carry only longer paths.
+enum class DirectLight { Auto, Chains, Separate };
 
 // A method's own parameters: name -> value as text (the method's ParamSpec says how to read it).
 using MethodParams = std::map<std::string, std::string>;
@@ -41,7 +45,7 @@ struct RenderSettings {
   uint64_t seed = 1;
   int width = 0, height = 0;                      // 0 = the scene's film size
   IntegratorSettings integrator;                  // maxDepth counts path segments
-  // Sample batches (pt, lt, bdpt; the direct pass of separateDirect).
+  // Sample batches (pt, lt, bdpt; the direct pass of directLight Separate).
   int spp = 16;                                   // samples per pixel (lt: light paths = spp * pixels)
   int samplesPerUnit = 0;                         // spp per work unit; 0 = choose automatically
   // Markov chain methods.
@@ -57,17 +61,22 @@ struct RenderSettings {
   MutationKernel kernel = MutationKernel::Kelemen;
   float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
   MltSplatting splatting = MltSplatting::MethodDefault;
-  bool separateDirect = false;                    // render direct light by bdpt; chains do indirect only
+  DirectLight directLight = DirectLight::Auto;    // Separate: direct light by bdpt, chains do indirect only
   MethodParams params;                            // the method's own parameters (validated by the method)
   double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
 };
 
+// Whether the job renders its direct light by a bdpt pass (a planned job's settings hold Chains or
+// Separate; Auto, not yet decided, counts as no pass).
+inline bool separatesDirect(const RenderSettings& s) { return s.directLight == DirectLight::Separate; }
+
 // Whether spp comes from the scene's sampler sample_count (when it has one): only when the user gave no
-// spp, renders by samples (a time budget sizes the job itself) and has no separateDirect (its direct pass
-// is sized by the plan, directSppFor; sample_count is meant for pt and bdpt). The one rule for the
+// spp, renders by samples (a time budget sizes the job itself) and asks for no direct pass (its spp is
+// the pass's, sized by the plan, directSppFor; sample_count is meant for pt and bdpt; an automatic pass
+// sizes its own spp). The one rule for the
 // in-process renderer and the coordinator.
 inline bool takesSceneSampleCount(const RenderSettings& s, bool sppGiven) {
-  return !sppGiven && s.timeBudgetSeconds <= 0 && !s.separateDirect;
+  return !sppGiven && s.timeBudgetSeconds <= 0 && !separatesDirect(s);
 }
 
 }  // namespace mlt

@@ -17,6 +17,7 @@
 #include "common/io/exr_io.h"
 #include "common/methods/chain_report.h"
 #include "common/scene/scene_loader.h"
+#include "common/settings/direct_light_name.h"
 #include "tools/cli/commands.h"
 #include "tools/eval/harness.h"
 
@@ -74,9 +75,10 @@ eval::FarmRunner makeFarmRunner(const std::map<std::string, std::string>& define
           s.mutationsPerPixel, s.bootstrapSamples,
           s.largeStepProb >= 0 ? fmt::format(" --large-step {}", s.largeStepProb) : std::string(), s.chains,
           s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen", s.kelemenS1, s.kelemenS2, s.gaussianSigma);
-    if (isMarkovChainMethod(s.method) && s.separateDirect)  // METHOD+separate-direct; spp 0: sized by the plan
-      cmd += s.spp > 0 ? fmt::format(" --separate-direct --spp {}", s.spp) : std::string(" --separate-direct");
-    else if (!isMarkovChainMethod(s.method))
+    if (isMarkovChainMethod(s.method)) {  // spp 0, or an automatic choice: the direct pass sized by the plan
+      cmd += fmt::format(" --direct-light {}", directLightName(s.directLight));
+      if (separatesDirect(s) && s.spp > 0) cmd += fmt::format(" --spp {}", s.spp);
+    } else
       cmd += fmt::format(" --spp {}", s.spp);
     if (threads > 0) cmd += fmt::format(" --threads {}", threads);
     for (const auto& [k, v] : defines) cmd += " -D " + shellQuote(k + "=" + v);

@@ -75,7 +75,7 @@ double roundDownSignificant(double x, int digits) {
 //      kTrialShare of the budget, at most kTrialMaxSeconds (their results are discarded: the trial never
 //      touches the image);
 //   3. choose mutations per pixel to fill what remains of the budget (rounded down to 3 digits; less the
-//      estimated time of a separateDirect direct pass), plan again from the same bootstrap, and run every
+//      estimated time of a direct pass), plan again from the same bootstrap, and run every
 //      chain of that plan.
 // `--mutations-per-pixel` with the chosen value renders the same image, bit for bit, without a budget.
 JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Clock::time_point start, int threads,
@@ -100,7 +100,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     // chainMixCost): the probe's cost (numbers drawn) per second over that cost. b_1's camera rays (mmlt,
     // rjmlt) cost the same at any size: left out of the throughput; the bootstrap's budget counts them
     // itself (BootstrapConfig::spentCost), so what is left of the share is all the bootstrap's.
-    const double candidateSeconds = probeSeconds - boot.raySeconds;
+    const double candidateSeconds = probeSeconds - boot.raySeconds - (boot.pilot ? boot.pilot->seconds : 0.0);
     const double perSecond =
         bootstrapCost(boot.result.lengths) / std::max(candidateSeconds, 1e-6) / chainMixCost(boot.result.lengths);
     const double shareLeft = std::max(0.0, kBootstrapShare * budget - probeSeconds);
@@ -111,7 +111,9 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     const double rayMutations = boot.emission && shareLeft > 0
                                     ? double(boot.emission->rays) * kEmissionRayCost / chainMixCost(boot.result.lengths)
                                     : 0.0;
-    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, s, shareLeft * perSecond + rayMutations));
+    RenderSettings sized = s;  // with the probe's choice of direct light (--direct-light auto): its lengths
+    sized.directLight = boot.settings.directLight;
+    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, sized, shareLeft * perSecond + rayMutations));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
       const MarkovChainBootstrap probed = std::move(boot);
       boot = bootstrapMarkovChainJob(scene, s, &probed);
@@ -125,7 +127,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   std::vector<WorkUnit> trialUnits, directUnits;
   for (const WorkUnit& u : trialPlan.units) {
     if (u.mutations == 0) {
-      directUnits.push_back(u);  // separateDirect: bdpt sample batches, whose cost does not depend on M
+      directUnits.push_back(u);  // the direct pass: bdpt sample batches, whose cost does not depend on M
       continue;
     }
     trialUnits.push_back(u);
@@ -138,7 +140,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     return again ? findMethod(s.method).plan(scene, *again) : trialPlan;
   }
 
-  // The direct pass (separateDirect) takes its share of the budget first: one of its units, timed. Sized
+  // The direct pass (directLight Separate) takes its share of the budget first: one of its units, timed. Sized
   // by the plan (spp 0: directSppFor), it grows with the mutations per pixel, so its time per mutation per
   // pixel joins the chains' in step 3 instead.
   double directSeconds = 0, directSecondsPerMpp = 0;
@@ -147,7 +149,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     runWorkUnit(scene, trialPlan, directUnits.front());
     directSeconds = std::chrono::duration<double>(Clock::now() - t0).count() * double(directUnits.size()) /
                     double(std::max(threads, 1));
-    if (s.spp == 0) {
+    if (s.spp == 0 || s.directLight == DirectLight::Auto) {  // sized by the plan: grows with the mutations
       directSecondsPerMpp = directSeconds / double(trialPlan.settings.spp) * kDirectSppPerMutation;
       directSeconds = 0;
     }

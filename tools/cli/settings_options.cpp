@@ -2,6 +2,7 @@
 // `mltfarm render` always had; `submit` inherits them.
 #include "tools/cli/settings_options.h"
 
+#include "common/settings/direct_light_name.h"
 #include "common/settings/splatting_name.h"
 #include "proto/convert.h"
 
@@ -61,9 +62,16 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
              "Markov chain methods: kelemen-mis (Kelemen et al.'s large-step MIS weights; the default) or "
              "expected-value (Veach: proposal weighted by a, current state by 1 - a; veach-mlt's only)")
       ->check(CLI::IsMember({"expected-value", "kelemen-mis"}));
-  add_flag("--separate-direct", separateDirect_,
-           "pssmlt-bdpt, mmlt, veach-mlt: render paths of up to 2 segments by bdpt (--spp samples; without --spp "
-           "0.25 per mutation per pixel, rounded up) and let the chains do only the longer ones (Veach's refinement)");
+  CLI::Option* directLight =
+      add_option("--direct-light", directLight_,
+                 "pssmlt-bdpt, mmlt, rjmlt, veach-mlt: who renders paths of up to 2 segments. auto (the default): a "
+                 "pilot of bdpt samples decides before the bootstrap, taking a bdpt pass where the direct light is "
+                 "a large and smooth part of the image (docs/CHAINS.md); chains: the chains, with the rest; "
+                 "separate: a bdpt pass (--spp samples; without --spp 0.25 per mutation per pixel, rounded up, "
+                 "as an automatic pass always is) and the chains only the longer ones (Veach's refinement)")
+          ->capture_default_str()
+          ->check(CLI::IsMember({"auto", "chains", "separate"}));
+  add_flag("--separate-direct", separateDirect_, "The same as --direct-light separate")->excludes(directLight);
   maxDepthOpt_ = add_option("--max-depth", maxDepth_,
                             "Maximum path length in segments (edges): 1 = directly visible emitters "
                             "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
@@ -128,10 +136,10 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.kelemenS2 = s2_;
   s.gaussianSigma = sigma_;
   s.splatting = splattingFromName(splatting_).value();  // empty or one of the names --splatting accepts
-  s.separateDirect = separateDirect_;
+  s.directLight = separateDirect_ ? DirectLight::Separate : directLightFromName(directLight_).value();  // a name --direct-light accepts
   // The direct pass without --spp: sized by the plan from the mutations per pixel (directSppFor), also under
   // a time budget; the scene's sampler sample_count is meant for pt and bdpt.
-  if (s.separateDirect && !out.hasSpp) s.spp = 0;
+  if (separatesDirect(s) && !out.hasSpp) s.spp = 0;
   // Given depths go into the settings too; unset ones keep IntegratorSettings' defaults and are resolved
   // against the scene's <integrator> by whoever loads it (the in-process renderer or the coordinator).
   out.hasMaxDepth = maxDepthOpt_->count() > 0;

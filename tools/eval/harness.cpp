@@ -50,13 +50,15 @@ MethodSpec parseMethodSpec(const std::string& spec) {
     rest = rest.substr(0, star);
   }
   if (m.label.empty()) m.label = rest;
-  const std::string kSeparateDirect = "+separate-direct";
-  if (rest.size() > kSeparateDirect.size() && rest.ends_with(kSeparateDirect)) {
-    rest.resize(rest.size() - kSeparateDirect.size());
-    m.separateDirect = true;
+  for (const auto& [suffix, direct] : {std::pair<std::string, DirectLight>{"+separate-direct", DirectLight::Separate},
+                                       {"+direct-in-chains", DirectLight::Chains}}) {
+    if (rest.size() <= suffix.size() || !rest.ends_with(suffix)) continue;
+    rest.resize(rest.size() - suffix.size());
+    m.directLight = direct;
     const ChainJobSpec* chain = findChainJobSpec(rest);
     if (!chain || !chain->allowsSeparateDirect())
       throw std::invalid_argument("method spec '" + spec + "': " + rest + " cannot render the direct light apart");
+    break;
   }
   m.method = findMethod(rest).name();
   return m;
@@ -166,10 +168,8 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   const int largest = int(cfg.budgets.size()) - 1;
   RenderSettings settings = base;
   settings.method = ms.method;
-  if (ms.separateDirect) {
-    settings.separateDirect = true;
-    settings.spp = 0;  // the direct pass sized by the plan from the work (mutations per pixel)
-  }
+  settings.directLight = ms.directLight;
+  if (separatesDirect(settings)) settings.spp = 0;  // the direct pass sized by the plan from the work (mutations per pixel)
   settings.chains = cfg.base.chains;
   settings.samplesPerUnit = cfg.base.samplesPerUnit;
 

@@ -1,0 +1,102 @@
+#include "common/job/direct_light_rule.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/core/rng.h"
+#include "common/integrators/evaluators.h"
+#include "common/mlt/develop.h"  // kDirectMaxSegments
+#include "common/sampler/sample_source.h"
+
+namespace mlt {
+
+namespace {
+constexpr uint64_t kPilotStreamTag = 0xd17ec7;  // the pilot's numbers: hashKeys(seed, tag), sample i
+}
+
+namespace {
+
+// Luminance of a bdpt sample's paths by length: at most kDirectMaxSegments - 1 segments (emission seen
+// directly), exactly kDirectMaxSegments (one bounce), and longer.
+struct ByLength {
+  double seen = 0, oneBounce = 0, longer = 0;
+};
+
+// `count` bdpt samples of the pilot's stream `tag` at max depth `maxDepth`; sample i lies in tile
+// g = i mod strata^2 of a strata x strata grid over the film, at a uniform position in it.
+std::vector<ByLength> pilotSamples(const RenderScene& scene, const RenderSettings& settings, int maxDepth,
+                                   uint64_t count, int strata, uint64_t tag) {
+  IntegratorSettings integrator = settings.integrator;
+  integrator.maxDepth = maxDepth;
+  const std::unique_ptr<PathEvaluator> bdpt = makeEvaluator(scene, "bdpt", integrator);
+  const int W = settings.width, H = settings.height, tiles = strata * strata;
+  const uint64_t seed = hashKeys(settings.seed, kPilotStreamTag, tag);
+  std::vector<ByLength> out(count);
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 64), [&](const tbb::blocked_range<uint64_t>& range) {
+    PathContribution path;
+    for (uint64_t i = range.begin(); i != range.end(); ++i) {
+      const int g = int(i % uint64_t(tiles)), gx = g % strata, gy = g / strata;
+      const int x0 = gx * W / strata, x1 = std::max(x0 + 1, (gx + 1) * W / strata);
+      const int y0 = gy * H / strata, y1 = std::max(y0 + 1, (gy + 1) * H / strata);
+      const float u = hashUniform(seed, i, 0xf1), v = hashUniform(seed, i, 0xf2);
+      const Vec2 pixel{float(std::min(x1 - 1, x0 + int(u * float(x1 - x0)))),
+                       float(std::min(y1 - 1, y0 + int(v * float(y1 - y0))))};
+      IndependentSource source(seed, i);
+      path.clear();
+      bdpt->evaluate(source, &pixel, path);
+      ByLength& o = out[i];
+      for (const Splat& sp : path.splats) {
+        if (!sp.L.isFinite()) continue;
+        const int length = sp.s + sp.t - 1;
+        (length < kDirectMaxSegments ? o.seen : length == kDirectMaxSegments ? o.oneBounce : o.longer) += luminance(sp.L);
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+DirectLightPilot directLightPilot(const RenderScene& scene, const RenderSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  DirectLightPilot out;
+  out.samples = kPilotShareSamples + kPilotCvSamples;
+
+  // The share, from samples of every length.
+  double direct = 0, all = 0;
+  for (const ByLength& x : pilotSamples(scene, settings, settings.integrator.maxDepth, kPilotShareSamples, 1, 1)) {
+    direct += x.seen + x.oneBounce;
+    all += x.seen + x.oneBounce + x.longer;
+  }
+  out.share = all > 0 ? direct / all : 0;
+
+  // The CV of one-bounce light within strata, from samples limited to kDirectMaxSegments segments.
+  const std::vector<ByLength> d = pilotSamples(scene, settings, kDirectMaxSegments, kPilotCvSamples, kPilotStrata, 2);
+  const int tiles = kPilotStrata * kPilotStrata;
+  std::vector<double> sum(tiles, 0.0), sumSq(tiles, 0.0), count(tiles, 0.0);
+  double total = 0;
+  for (uint64_t i = 0; i < kPilotCvSamples; ++i) {
+    const int g = int(i % uint64_t(tiles));
+    const double x = d[i].oneBounce;
+    sum[g] += x;
+    sumSq[g] += x * x;
+    count[g] += 1;
+    total += x;
+  }
+  double within = 0;  // sum_g (sumSq_g - sum_g^2 / n_g)
+  for (int g = 0; g < tiles; ++g)
+    if (count[g] > 0) within += std::max(0.0, sumSq[g] - sum[g] * sum[g] / count[g]);
+  const double n = double(kPilotCvSamples), mean = total / n;
+  out.cv = mean > 0 ? std::sqrt(within / n) / mean : 0;
+  out.separate = out.share >= kDirectMinShare && out.cv <= kDirectMaxCv;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace mlt

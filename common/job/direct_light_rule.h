@@ -1,0 +1,55 @@
+// Whether a chain job renders its direct light with a bdpt pass (separateDirect) when the settings leave
+// the choice to the plan (DirectLight::Auto).
+//
+// The pass helps where bdpt's estimate of the direct light is smooth, and hurts where it is spiky:
+// measured at the results page's protocol (docs/CHAINS.md, "--separate-direct"), it lowered mmlt's and
+// veach-mlt's relMSE on the Cornell box, checker-spheres, textured-serialized and cornell-spheres (large
+// lights over diffuse or textured surfaces) and raised it on glossy-plates (small lights in glossy
+// reflections), door-ajar (light through a gap) and caustic-mirror (no direct light to render at all).
+// A chain spends its mutations where the image is bright, so it does well on a highlight that a pixel
+// estimator samples badly, and badly in the dark pixels a smooth pixel estimator gets right.
+//
+// A pilot tells the two apart before the job is planned, with the direct pass's own estimator, bdpt:
+//   - kPilotShareSamples samples at the job's max depth give the share of the light in paths of at most
+//     kDirectMaxSegments segments: share = sum_i d_i / sum_i (d_i + r_i), d_i and r_i the luminance of
+//     sample i's short and longer paths;
+//   - kPilotCvSamples samples limited to kDirectMaxSegments give the one-bounce light's coefficient of
+//     variation per sample within kPilotStrata x kPilotStrata film tiles g (sample i in tile i mod G):
+//         CV^2 = sum_g sum_{i in g} (x_i - xbar_g)^2 / (N xbar^2),   x_i = sample i's one-bounce luminance.
+//     The tiles leave out how the image varies from place to place (the pass's pixels each estimate their
+//     own mean); what is left is the noise the pass would show. Emission seen directly (one segment) is
+//     left out of the CV: the pass renders it nearly without noise, however bright the light's pixels.
+// The pass is taken when share >= kDirectMinShare and CV <= kDirectMaxCv. The thresholds come from the
+// bundled scenes at 256x256 (tests/bench/direct_light_rule_bench, 10 seeds; docs/CHAINS.md): the scenes
+// the pass helped have share 0.67-0.91 and CV 0.5-4.7 (cornell-spheres' largest), the scenes it hurt CV
+// 8.3 and more (glossy-plates' smallest), share 0.16 (door-ajar, CV 6.5-7.1) or no direct light at all
+// (caustic-mirror). The pilot is a pure function of the scene, the seed, the film and the integrator
+// settings (not of the thread count), so the resolved choice given explicitly reproduces the job.
+// It costs about 0.03 s of one thread at 256x256; it counts as part of the bootstrap.
+#pragma once
+#include <cstdint>
+
+#include "common/settings/render_settings.h"
+
+namespace mlt {
+
+class RenderScene;
+
+constexpr uint64_t kPilotShareSamples = 1024;  // at the job's max depth
+constexpr uint64_t kPilotCvSamples = 16384;    // at kDirectMaxSegments
+constexpr int kPilotStrata = 32;
+constexpr double kDirectMinShare = 0.3;
+constexpr double kDirectMaxCv = 6.0;
+
+struct DirectLightPilot {
+  uint64_t samples = 0;
+  double share = 0;    // of the pilot's luminance, in paths of at most kDirectMaxSegments segments
+  double cv = 0;       // the direct estimate's coefficient of variation per sample, within film strata
+  double seconds = 0;  // wall time of the pilot
+  bool separate = false;  // the rule's choice: share >= kDirectMinShare && cv <= kDirectMaxCv
+};
+
+// Runs the pilot on all threads of the calling arena (the result does not depend on how many).
+DirectLightPilot directLightPilot(const RenderScene& scene, const RenderSettings& settings);
+
+}  // namespace mlt

@@ -1,0 +1,151 @@
+// The direct-light rule (common/job/direct_light_rule.h): its pilot is a pure function of its inputs, its
+// share is the image's (bdpt rendered at max depth 2 against the full depth), and it tells a smooth
+// direct light from a spiky or absent one on the bundled scenes it was read from; a job left to the plan
+// (DirectLight::Auto) is the job with the pilot's choice given explicitly, bit for bit.
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/core/color.h"
+#include "common/integrators/evaluators.h"
+#include "common/job/direct_light_rule.h"
+#include "common/job/mlt_job.h"
+#include "common/methods/chain_report.h"
+#include "common/methods/pss_method.h"
+#include "common/methods/registry.h"
+#include "common/render/render_scene.h"
+#include "common/scene/scene_loader.h"
+#include "tests/support/estimates.h"
+#include "tests/support/test_scenes.h"
+
+namespace mlt {
+namespace {
+
+RenderSettings pilotSettings(int width, int height, int maxDepth, uint64_t seed) {
+  RenderSettings s;
+  s.method = "mmlt";
+  s.width = width;
+  s.height = height;
+  s.integrator.maxDepth = maxDepth;
+  s.seed = seed;
+  return s;
+}
+
+TEST(DirectLightRule, PilotIsAPureFunctionOfItsInputs) {
+  const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(48, 32));
+  const RenderSettings s = pilotSettings(48, 32, 5, 7);
+  DirectLightPilot one, two;
+  tbb::task_arena(1).execute([&] { one = directLightPilot(*scene, s); });
+  tbb::task_arena(2).execute([&] { two = directLightPilot(*scene, s); });
+  EXPECT_EQ(std::memcmp(&one.share, &two.share, sizeof(double)), 0);
+  EXPECT_EQ(std::memcmp(&one.cv, &two.cv, sizeof(double)), 0);
+  EXPECT_EQ(one.separate, two.separate);
+  EXPECT_EQ(one.samples, kPilotShareSamples + kPilotCvSamples);
+  RenderSettings other = s;
+  other.seed = 8;
+  EXPECT_NE(directLightPilot(*scene, other).cv, one.cv);  // its own numbers, from the job's seed
+}
+
+// The share the pilot measures is the direct light's share of the image: bdpt limited to two segments
+// against bdpt at the full depth (64 spp on a 32x32 film: their ratio's noise is far below the pilot's),
+// within 4 standard errors of the mean of 8 pilots (their spread measured, not assumed).
+TEST(DirectLightRule, ShareIsTheDirectLightsShareOfTheImage) {
+  constexpr int kRes = 32, kDepth = 5;
+  const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(kRes, kRes));
+  auto imageMean = [&](int maxDepth) {
+    IntegratorSettings integrator;
+    integrator.maxDepth = maxDepth;
+    const std::unique_ptr<PathEvaluator> bdpt = makeEvaluator(*scene, "bdpt", integrator);
+    return test::estimateImage(*bdpt, kRes, kRes, 11, 64 * kRes * kRes, 1, 1).mean[0];
+  };
+  const double expected = imageMean(kDirectMaxSegments) / imageMean(kDepth);
+  std::vector<double> shares;
+  for (uint64_t seed = 1; seed <= 8; ++seed) shares.push_back(directLightPilot(*scene, pilotSettings(kRes, kRes, kDepth, seed)).share);
+  double mean = 0, var = 0;
+  for (double v : shares) mean += v / double(shares.size());
+  for (double v : shares) var += (v - mean) * (v - mean) / double(shares.size() - 1);
+  const double se = std::sqrt(var / double(shares.size()));
+  std::printf("share: pilots %.4f +- %.4f, bdpt images %.4f\n", mean, se, expected);
+  EXPECT_GT(expected, 0.3);  // a box lit from above: mostly direct light
+  EXPECT_LT(expected, 0.95);
+  EXPECT_LT(std::abs(mean - expected), 4 * se + 0.002) << "pilot share " << mean << " +- " << se << ", images " << expected;
+}
+
+// The bundled scenes the thresholds were read from, at 256x256 and their own max depth: a smooth direct
+// light takes the pass (the Cornell box, textured-serialized), a spiky one (glossy-plates: small lights in
+// glossy reflections) or none at all (caustic-mirror: every light behind a mirror) does not.
+TEST(DirectLightRule, SmoothDirectLightTakesThePassSpikyOrAbsentDoesNot) {
+  struct Case {
+    std::string file;
+    bool separate;
+  };
+  for (const Case& c : std::vector<Case>{{"cornell-box.xml", true},
+                                         {"textured-serialized.xml", true},
+                                         {"glossy-plates.xml", false},
+                                         {"caustic-mirror.xml", false}}) {
+    SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + c.file);
+    desc.camera.width = desc.camera.height = 256;
+    const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
+    for (const uint64_t seed : {uint64_t(1), uint64_t(2)}) {
+      const DirectLightPilot p = directLightPilot(*scene, pilotSettings(256, 256, desc.maxDepth.value_or(5), seed));
+      std::printf("%s seed %d: share %.3f, CV %.2f, %.3f s\n", c.file.c_str(), int(seed), p.share, p.cv, p.seconds);
+      EXPECT_EQ(p.separate, c.separate) << c.file << " seed " << seed << ": share " << p.share << ", CV " << p.cv;
+      EXPECT_EQ(p.separate, p.share >= kDirectMinShare && p.cv <= kDirectMaxCv);
+      EXPECT_GE(p.share, 0.0);
+      EXPECT_LE(p.share, 1.0);
+    }
+  }
+}
+
+// Auto is resolved by the plan into the pilot's choice, which the plan holds (with the pass sized by the
+// plan, directSppFor, whatever spp the settings carried) along with the pilot's numbers; the image is the
+// one the explicit choice gives, bit for bit. A method that cannot render the direct light apart (pssmlt)
+// resolves it to Chains without a pilot.
+TEST(DirectLightRule, AutoIsThePlansExplicitChoice) {
+  const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(24, 16));
+  for (const std::string method : {"mmlt", "pssmlt-bdpt", "pssmlt"}) {
+    RenderSettings s;
+    s.method = method;
+    s.seed = 5;
+    s.integrator.maxDepth = 4;
+    s.mutationsPerPixel = 12;
+    s.bootstrapSamples = 4000;
+    s.spp = 16;  // ignored by an automatic pass
+    const JobPlan automatic = planJob(*scene, s);
+    ASSERT_NE(automatic.settings.directLight, DirectLight::Auto) << method;
+    const bool apart = findChainJobSpec(method)->allowsSeparateDirect();
+    EXPECT_EQ(automatic.settings.directLight, apart ? DirectLight::Separate : DirectLight::Chains) << method;
+    EXPECT_EQ(automatic.norm.directShare >= 0, apart) << method;
+    if (apart) EXPECT_EQ(automatic.settings.spp, directSppFor(s.mutationsPerPixel));
+
+    RenderSettings explicitChoice = s;
+    explicitChoice.directLight = automatic.settings.directLight;
+    if (separatesDirect(explicitChoice)) explicitChoice.spp = 0;
+    const JobPlan given = planJob(*scene, explicitChoice);
+    EXPECT_LT(given.norm.directShare, 0);  // no pilot ran
+    auto render = [&](const JobPlan& plan) {
+      PartialResult merged;
+      for (const WorkUnit& u : plan.units) merged.add(runWorkUnit(*scene, plan, u));
+      return developImage(plan, merged);
+    };
+    const std::vector<Color> a = render(automatic), b = render(given);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0) << method;
+
+    PartialResult merged;
+    for (const WorkUnit& u : automatic.units) merged.add(runWorkUnit(*scene, automatic, u));
+    ImageMetadata m;
+    addChainMetadata(makeChainReport(automatic, merged), m);
+    EXPECT_EQ(m.numbers.count("directLightShare"), apart ? 1u : 0u) << method;
+    EXPECT_EQ(m.numbers.at("separateDirect"), apart ? 1.0 : 0.0) << method;
+  }
+}
+
+}  // namespace
+}  // namespace mlt
