@@ -12,6 +12,7 @@ ctest --test-dir build --output-on-failure -j"$(nproc)" --timeout 900
 # The sanitizer job: unit tests only (no benchmarks, not the long farm and agreement suites), -O1.
 ASAN_TESTS=(core_test film_test exr_test camera_test accel_test scene_loader_test pbrt_loader_test
             serialized_mesh_test textured_params_test executor_test sample_job_test mlt_source_test mlt_job_test
+            direct_light_rule_test
             veach_path_test rjmlt_path_inversion_test farm_layer_test farm_auth_test farm_fuzz_test)
 # Leak checking is off: gRPC and protobuf keep process-lifetime allocations, and LeakSanitizer cannot run
 # where ptrace is forbidden (containers). Set for the build too: test discovery runs the binaries.

@@ -16,7 +16,6 @@
 
 #include "common/job/direct_light_rule.h"
 #include "common/job/sample_job.h"
-#include "common/settings/direct_light_name.h"
 #include "common/mlt/bootstrap.h"
 #include "common/mlt/chain.h"
 #include "common/mlt/develop.h"
@@ -25,6 +24,7 @@
 #include "common/mlt/pss_chain.h"
 #include "common/mlt/target.h"
 #include "common/render/render_scene.h"
+#include "common/settings/direct_light_name.h"
 
 namespace mlt {
 
@@ -198,6 +198,7 @@ bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings&
 
 MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene,
                                              const RenderSettings& settings, const MarkovChainBootstrap* earlier) {
+  validateMarkovChainSettings(spec, settings);  // before the pilot reads the film size
   MarkovChainBootstrap out;
   // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
   // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.

@@ -28,6 +28,7 @@ const RenderScene& cornell() {
 JobPlan makePlan(std::string m, int maxDepth) {
   RenderSettings s;
   s.method = m;
+  s.directLight = DirectLight::Chains;  // the chains over every length, as the reference figures count them
   s.integrator.maxDepth = maxDepth;
   s.mutationsPerPixel = 16;  // 1M mutations in 64 chains of 16384 (the default chain length)
   s.chains = 64;

@@ -240,6 +240,7 @@ MethodData& methodData(std::string m) {
   d.method = m;
   RenderSettings s;
   s.method = m;
+  s.directLight = DirectLight::Chains;  // every length in the chains, as PERFORMANCE.md's figures were measured
   s.integrator.maxDepth = kDepth;
   s.integrator.rrDepth = bundled().rrDepth;
   s.mutationsPerPixel = 16;
