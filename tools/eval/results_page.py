@@ -26,6 +26,14 @@ HARD_SCENES = ("caustic-mirror", "door-ajar", "glossy-plates")
 CHAIN_METHODS = ("pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt", "veach-mlt")
 
 
+METHOD_ORDER = ("pt", "lt", "bdpt") + CHAIN_METHODS
+
+
+def method_rank(label):  # known methods in METHOD_ORDER, a METHOD+variant after its method, others last
+    base = label.split("+")[0]
+    return (METHOD_ORDER.index(base) if base in METHOD_ORDER else len(METHOD_ORDER), label != base)
+
+
 def is_chain(label):  # a method label, also METHOD+separate-direct (the harness's method spec)
     return label.split("+")[0] in CHAIN_METHODS
 
@@ -148,7 +156,7 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
     for r in runs:
         by[(r["method"], float(r["budget"]))].append(r)
     g = {k: Group(v) for k, v in by.items()}
-    methods = list(groups)
+    methods = sorted(groups, key=method_rank)  # the same order on every scene, whatever order the runs came in
     if ref:
         lines.append("Reference: %s; its own noise: relMSE floor %s, mean brightness +-%.3f%% (1 std. error)."
                      % (ref["source"], fmt_e(float(ref["relMSE_floor"])), 100 * float(ref["mean_rel_stderr"])))
