@@ -225,8 +225,13 @@ TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
   EXPECT_TRUE(std::regex_search(r.output, std::regex("mmlt: direct light by a bdpt pass \\(--direct-light separate\\): "
                                                      "the pilot's [0-9]+ bdpt samples")))
       << r.output;
+  // The summary, printed from the image's metadata (as after a farm render), says it too.
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("direct light \\(paths of at most 2 segments\\): a bdpt pass of 1 "
+                                                     "samples per pixel \\(the pilot's choice: [0-9.]+% of the light")))
+      << r.output;
   const auto& n = readExr(out.string()).metadata.numbers;
   EXPECT_EQ(n.at("separateDirect"), 1.0);
+  EXPECT_EQ(n.at("directSpp"), 1.0);  // 0.25 per mutation per pixel, rounded up (directSppFor)
   EXPECT_GE(n.at("directLightShare"), kDirectMinShare);
   EXPECT_LE(n.at("directLightCv"), kDirectMaxCv);
 }

@@ -141,6 +141,7 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   const RenderSettings& s = r.settings;
   m.numbers["largeStepProb"] = s.largeStepProb;
   m.numbers["separateDirect"] = separatesDirect(s) ? 1 : 0;
+  if (separatesDirect(s)) m.numbers["directSpp"] = s.spp;  // the pass's bdpt samples per pixel
   if (r.directShare >= 0) {  // the plan chose it (--direct-light auto): what the pilot measured
     m.numbers["directLightShare"] = r.directShare;
     m.numbers["directLightCv"] = r.directCv;
@@ -205,6 +206,7 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   }
   if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
   r.settings.directLight = number(m, "separateDirect") != 0 ? DirectLight::Separate : DirectLight::Chains;
+  if (m.numbers.count("directSpp")) r.settings.spp = int(number(m, "directSpp"));
   if (const auto it = m.strings.find("kernel"); it != m.strings.end() && it->second == "gaussian") {
     r.settings.kernel = MutationKernel::Gaussian;
     r.settings.gaussianSigma = float(number(m, "kernelSigma"));
@@ -260,6 +262,15 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
     for (const MutationKindReport& k : r.kinds)
       kinds += fmt::format("{}{} steps {:.1f}%", kinds.empty() ? "" : ", ", k.name, 100 * k.acceptance);
     out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
+  }
+  if (separatesDirect(r.settings) || r.directShare >= 0) {
+    const std::string pilot = r.directShare >= 0 ? fmt::format("the pilot's choice: {:.1f}% of the light, CV {:.2f}",
+                                                               100 * r.directShare, r.directCv)
+                                                 : std::string("as asked");
+    out += separatesDirect(r.settings)
+               ? fmt::format("direct light (paths of at most 2 segments): a bdpt pass of {} samples per pixel ({})\n",
+                             r.settings.spp, pilot)
+               : fmt::format("direct light (paths of at most 2 segments): in the chains ({})\n", pilot);
   }
   const std::string rates = formatMoveRates(r);
   if (!rates.empty()) out += fmt::format("mutations/s per move, one thread: {}\n", rates);
