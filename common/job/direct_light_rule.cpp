@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -17,10 +18,8 @@
 namespace mlt {
 
 namespace {
-constexpr uint64_t kPilotStreamTag = 0xd17ec7;  // the pilot's numbers: hashKeys(seed, tag), sample i
-}
 
-namespace {
+constexpr uint64_t kPilotStreamTag = 0xd17ec7;  // the pilot's numbers: hashKeys(seed, tag, pass), sample i
 
 // Luminance of a bdpt sample's paths by length: at most kDirectMaxSegments - 1 segments (emission seen
 // directly), exactly kDirectMaxSegments (one bounce), and longer.
