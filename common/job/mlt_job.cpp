@@ -64,6 +64,13 @@ int directSppFor(double mutationsPerPixel) {
   return std::isfinite(spp) ? int(std::clamp(spp, 1.0, double(1 << 24))) : 1;
 }
 
+RenderSettings withDirectLightChoice(RenderSettings s, DirectLight chosen) {
+  if (s.directLight != DirectLight::Auto) return s;
+  s.directLight = chosen;
+  if (separatesDirect(s)) s.spp = 0;  // an automatic pass is sized by the plan (directSppFor)
+  return s;
+}
+
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
   if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
   if (s.splatting == MltSplatting::MethodDefault) s.splatting = spec.defaultSplatting();
@@ -203,9 +210,9 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
   // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.
   RenderSettings resolved = settings;
-  if (resolved.directLight == DirectLight::Auto) {
+  if (settings.directLight == DirectLight::Auto) {
     if (!spec.allowsSeparateDirect()) {
-      resolved.directLight = DirectLight::Chains;
+      resolved = withDirectLightChoice(settings, DirectLight::Chains);
     } else {
       if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings)) {
         out.pilot = earlier->pilot;
@@ -214,8 +221,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
         out.pilot = directLightPilot(scene, settings);
       }
       const DirectLightPilot& p = *out.pilot;
-      resolved.directLight = p.separate ? DirectLight::Separate : DirectLight::Chains;
-      if (p.separate) resolved.spp = 0;  // the automatic pass is sized by the plan (directSppFor)
+      resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
                    "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
                    spec.name(), p.separate ? "by a bdpt pass (--direct-light separate)" : "in the chains (--direct-light chains)",
@@ -223,9 +229,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
                    p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
     }
   }
-  const RenderSettings& s = resolved;
-  validateMarkovChainSettings(spec, s);
-
+  const RenderSettings& s = resolved;  // valid as `settings` was: the pass is chosen only where allowed
   out.settings = s;
   out.settings.bootstrapSamples = int(bootstrapPerLength(spec, s));
   const std::vector<int> lengths = chainPathLengths(spec, s);
@@ -367,12 +371,9 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*/, const RenderSettings& settings,
                            const MarkovChainBootstrap& bootstrap) {
-  RenderSettings chosen = settings;
-  if (chosen.directLight == DirectLight::Auto) {  // as the bootstrap decided (bootstrapMarkovChainJob)
-    chosen.directLight = bootstrap.settings.directLight;
-    if (separatesDirect(chosen)) chosen.spp = 0;  // the automatic pass is sized by the plan
-  }
-  const RenderSettings s = resolveChainSettings(spec, chosen);  // the plan holds the values used
+  // Auto: as the bootstrap decided (bootstrapMarkovChainJob). The plan holds the values used.
+  const RenderSettings s =
+      resolveChainSettings(spec, withDirectLightChoice(settings, bootstrap.settings.directLight));
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));

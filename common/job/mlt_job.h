@@ -139,6 +139,10 @@ int directSppFor(double mutationsPerPixel);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0; the
 // direct pass's spp with separateDirect and spp = 0: directSppFor(mutationsPerPixel)).
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings settings);
+// Settings whose directLight is Auto with `chosen` (Chains or Separate) in its place, the one way Auto is
+// resolved (the bootstrap's pilot, the plan, a time budget's sizing): an automatic pass is sized by the
+// plan (spp 0, directSppFor) whatever spp the settings carried. Other settings are returned as they are.
+RenderSettings withDirectLightChoice(RenderSettings settings, DirectLight chosen);
 // The path lengths a job's chains cover ({-1} without chains per length; kMin..maxDepth with them; with
 // unlimited depth the first block, to which the bootstrap adds).
 std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& settings);

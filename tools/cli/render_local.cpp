@@ -111,9 +111,9 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     const double rayMutations = boot.emission && shareLeft > 0
                                     ? double(boot.emission->rays) * kEmissionRayCost / chainMixCost(boot.result.lengths)
                                     : 0.0;
-    RenderSettings sized = s;  // with the probe's choice of direct light (--direct-light auto): its lengths
-    sized.directLight = boot.settings.directLight;
-    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, sized, shareLeft * perSecond + rayMutations));
+    // Sized for the lengths of the probe's choice of direct light (--direct-light auto).
+    s.bootstrapSamples = int(bootstrapPerLengthFor(*method, withDirectLightChoice(s, boot.settings.directLight),
+                                                   shareLeft * perSecond + rayMutations));
     if (uint64_t(s.bootstrapSamples) != kMinBootstrapPerLength) {
       const MarkovChainBootstrap probed = std::move(boot);
       boot = bootstrapMarkovChainJob(scene, s, &probed);
