@@ -216,17 +216,17 @@ const std::string kSmallMmlt = " --method mmlt --width 32 --height 32 --max-dept
                                "--threads 2 --in-process --direct-light chains ";
 
 // Without --direct-light the plan's pilot chooses (common/job/direct_light_rule.h), and the log and the
-// image say what it chose and why: on the Cornell box, a bdpt pass for the direct light.
+// image say what it chose and why: on the Cornell box, a pt pass for the direct light.
 TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
   const fs::path out = tempDir() / "auto.exr";
   const RunResult r = run("render " + kScenes + "cornell-box.xml --method mmlt --width 64 --height 64 --max-depth 4 "
                           "--mutations-per-pixel 2 --seed 3 --threads 2 --in-process -o " + out.string());
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("mmlt: direct light by a bdpt pass \\(--direct-light separate\\): "
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("mmlt: direct light by a pt pass \\(--direct-light separate\\): "
                                                      "the pilot's [0-9]+ bdpt samples")))
       << r.output;
   // The summary, printed from the image's metadata (as after a farm render), says it too.
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("direct light \\(paths of at most 2 segments\\): a bdpt pass of 1 "
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("direct light \\(paths of at most 2 segments\\): a pt pass of 1 "
                                                      "samples per pixel \\(the pilot's choice: [0-9.]+% of the light")))
       << r.output;
   const auto& n = readExr(out.string()).metadata.numbers;

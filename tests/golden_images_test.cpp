@@ -54,6 +54,8 @@
 //    light's default is automatic (common/job/direct_light_rule.h), and the pilot takes a bdpt pass there.
 //    Where it does not (glossy-plates, caustic-mirror; veach-mlt on cornell-variety) and for pssmlt, which
 //    cannot render it apart, the digests are unchanged: the pilot draws numbers of its own.
+//  - The same seven again: the direct pass is pt instead of bdpt, and twice as large (kDirectPassMethod,
+//    kDirectSppPerMutation). The chains are the same; every other digest unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -203,8 +205,8 @@ const Case kCases[] = {
     Case{"cornell-box", "lt", "aac1d685dbcbddd5940fe1adc62a37adce95225788e2baf91d2b8172fc75016b"},
     Case{"cornell-box", "bdpt", "19e44f5ee9a6a65d66f3f3683d31d73c905c14a4c5b4ff3e1d57be0037ddc9e4"},
     Case{"cornell-box", "pssmlt", "ef8317bc4767724fcbb5fda5e056a3ee9a0fbda0a2273ac4920390f79ba028ac"},
-    Case{"cornell-box", "pssmlt-bdpt", "7de71a894455f517d2a2ed312a50b7f30e4f8cebb589b102b1cb6f57f7520772"},
-    Case{"cornell-box", "mmlt", "9573d37960c5d89224bc4dfd98c3f4e98f08721ed5df54a48ae14a9b308e55d7"},
+    Case{"cornell-box", "pssmlt-bdpt", "a21374f013012981b5048de7e3f48b21f1fd66fc46f1485498ffd4f48ef1f16c"},
+    Case{"cornell-box", "mmlt", "d3b08e113df76ec60f7a1b4f86a5e7eed34350d9ae14f67d0b16453d7ba2be03"},
     Case{"caustic-mirror", "pt", "1f47d49c9699d18775c3fea75c4e03076cdc895d83bad773cec3c631845d6cd1"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "a5f0f9af415ee839e134ab51f79efa44d8775b351c400cfc76e6a8ba351512a9"},
@@ -221,13 +223,13 @@ const Case kCases[] = {
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
     Case{"cornell-variety", "bdpt", "567a7a36a7eb29d624ac83ba717b88bc55936cf8bd2fa07b5d4f501b68fbfda3"},
     Case{"cornell-variety", "pssmlt", "6b5e05fbd403a2a715ee3c23bd92309bc72dc7a19fba48edb7690847b5a749d5"},
-    Case{"cornell-variety", "pssmlt-bdpt", "0dea30b22fbad03954bb33bc9998a2e8fd63354a1cadc29a8d17edcaea43e4b0"},
-    Case{"cornell-variety", "mmlt", "a7f6764d10c5ee43f75e1f7edb1d4a6fef9d88b99c538a3d197f8fd11e9a32fb"},
-    Case{"cornell-box", "rjmlt", "49e3564782f6b250a4ca9bd7525cfd890a3738ad8250fe523e4805bf86af358a"},
+    Case{"cornell-variety", "pssmlt-bdpt", "128a14130718196aa7ce0ebcf0cc1d5fa317ecf5a451f21c6b2b9cb754533e25"},
+    Case{"cornell-variety", "mmlt", "c057fbeb2c29c69fa8fda169d02373a6b6b86c8766922aa29eda721ed6dc749e"},
+    Case{"cornell-box", "rjmlt", "928ae321988cd9c24472e7e640bc0b1ace76e0934557cbaee951a714fb203685"},
     Case{"caustic-mirror", "rjmlt", "f1673290bd9f401f70d3ad1a63e88e2d5e737c80d427f2481403aa9ee229fff4"},
     Case{"glossy-plates", "rjmlt", "c657067a811006e5ffb0b9e6c7054bfdf489e83cce6dc5577f77cbe6af484a3d"},
-    Case{"cornell-variety", "rjmlt", "08d85432be45f4761cf9039e8a5ca374fb3ed417bcc74fdd9cb4514ce92c1752"},
-    Case{"cornell-box", "veach-mlt", "29353fd15b91e9640ebc6e6e78c79d54fb447eb963ea74526d8749557f6fb444"},
+    Case{"cornell-variety", "rjmlt", "6cfced545dc0b86be0872d053800641092ef441f4525e80cafbc98964e4c8a09"},
+    Case{"cornell-box", "veach-mlt", "10fdc945cd5118a698ff5a29b273148b7bfd392f96bf018c2ff40bd02840dc7e"},
     Case{"caustic-mirror", "veach-mlt", "758dca418217312995a2204d2b7e0030c3620f6fd402e0780ec26eb5fd6457af"},
     Case{"glossy-plates", "veach-mlt", "7d956680fe78e854c13919c4a7daf77068aac266ef9f7f4aa7f78fa27b99a372"},
     // cornell-variety has a directional light, which veach-mlt refuses with a clear error (area, point and

@@ -6,7 +6,9 @@
 #include <cstring>
 #include <vector>
 
+#include "common/core/rng.h"
 #include "common/mlt/kelemen_source.h"
+#include "common/sampler/sample_source.h"
 #include "tests/support/chi2.h"
 
 namespace mlt {
@@ -182,3 +184,23 @@ TEST(KelemenSource, RejectsBadParameters) {
 
 }  // namespace
 }  // namespace mlt
+
+// IndependentSource reads hashUniform(seed, index, stream, coordinate) through HashPrefix2 (rng.h): the
+// same bits, including seeds and indices with high bits set, coordinates past the table, resets.
+TEST(IndependentSource, ValuesAreHashUniformBitForBit) {
+  mlt::Pcg32 rng(7, 11);
+  for (int trial = 0; trial < 200; ++trial) {
+    const uint64_t seed = (uint64_t(rng.nextU32()) << 32) | rng.nextU32();
+    const uint64_t index = trial % 3 == 0 ? uint64_t(trial) : (uint64_t(rng.nextU32()) << 32) | rng.nextU32();
+    mlt::IndependentSource source(1, 2);
+    source.reset(seed, index);
+    for (int stream = 0; stream < 4; ++stream)
+      for (int c : {0, 1, 2, 5, 63, 64, 65, 200, 100000}) {
+        const float want = mlt::hashUniform(seed, index, uint64_t(stream), uint64_t(c));
+        ASSERT_EQ(source.valueAt(stream, c), want) << "seed " << seed << " index " << index << " stream " << stream
+                                                   << " coordinate " << c;
+      }
+    for (uint64_t c : {uint64_t(0), uint64_t(63), uint64_t(64), ~uint64_t(0)})
+      ASSERT_EQ(mlt::HashPrefix2(seed, index)(3, c), mlt::hashKeys(seed, index, uint64_t(3), c));
+  }
+}

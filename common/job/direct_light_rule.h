@@ -1,15 +1,18 @@
-// Whether a chain job renders its direct light with a bdpt pass (separateDirect) when the settings leave
-// the choice to the plan (DirectLight::Auto).
+// Whether a chain job renders its direct light with a pass of its own (separateDirect; a pt pass,
+// kDirectPassMethod in mlt_job.h) when the settings leave the choice to the plan (DirectLight::Auto).
 //
-// The pass helps where bdpt's estimate of the direct light is smooth, and hurts where it is spiky:
-// measured at the results page's protocol (docs/CHAINS.md, "--separate-direct"), it lowered mmlt's and
+// The pass helps where a pixel estimate of the direct light is smooth, and hurts where it is spiky:
+// measured at the results page's protocol (docs/CHAINS.md, "--separate-direct"; then with a bdpt pass, and
+// again with the pt pass: glossy-plates 2.0-3.1x, door-ajar 1.2-1.4x for mmlt and veach-mlt), it lowered mmlt's and
 // veach-mlt's relMSE on the Cornell box, checker-spheres, textured-serialized and cornell-spheres (large
 // lights over diffuse or textured surfaces) and raised it on glossy-plates (small lights in glossy
 // reflections), door-ajar (light through a gap) and caustic-mirror (no direct light to render at all).
 // A chain spends its mutations where the image is bright, so it does well on a highlight that a pixel
 // estimator samples badly, and badly in the dark pixels a smooth pixel estimator gets right.
 //
-// A pilot tells the two apart before the job is planned, with the direct pass's own estimator, bdpt:
+// A pilot tells the two apart before the job is planned, with bdpt samples (the pass's estimator until
+// the pt pass replaced it; the thresholds below were fitted with them, and classify the bundled scenes
+// the same way for the pt pass):
 //   - kPilotShareSamples samples at the job's max depth give the share of the light in paths of at most
 //     kDirectMaxSegments segments: share = sum_i d_i / sum_i (d_i + r_i), d_i and r_i the luminance of
 //     sample i's short and longer paths;

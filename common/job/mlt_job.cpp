@@ -127,11 +127,11 @@ namespace {
 
 
 
-// Settings of the direct-illumination pass (separateDirect): bdpt limited to kDirectMaxSegments.
+// Settings of the direct-illumination pass (separateDirect): kDirectPassMethod limited to kDirectMaxSegments.
 JobPlan directPlan(const JobPlan& plan) {
   JobPlan d;
   d.settings = plan.settings;
-  d.settings.method = "bdpt";
+  d.settings.method = kDirectPassMethod;
   d.settings.integrator.maxDepth = kDirectMaxSegments;
   return d;
 }
@@ -224,7 +224,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
                    "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
-                   spec.name(), p.separate ? "by a bdpt pass (--direct-light separate)" : "in the chains (--direct-light chains)",
+                   spec.name(), p.separate ? "by a pt pass (--direct-light separate)" : "in the chains (--direct-light chains)",
                    p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
                    p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
     }
@@ -439,7 +439,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   }
   plan.settings.chains = static_cast<int>(index);
 
-  // ---- direct illumination pass (separateDirect): bdpt sample batches after the chains ----
+  // ---- direct illumination pass (separateDirect): pt sample batches after the chains ----
   if (separatesDirect(s)) {
     JobPlan d = planSampleJob(directPlan(plan).settings);
     for (WorkUnit u : d.units) {
@@ -453,7 +453,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
                "refined as the chains run",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
-               separatesDirect(s) ? ", direct light by bdpt" : "");
+               separatesDirect(s) ? ", direct light by pt" : "");
   return plan;
 }
 
@@ -461,7 +461,7 @@ PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const
   if (!isDirectUnit(unit)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is not a sample batch of the direct pass");
   if (!separatesDirect(plan.settings)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
   const JobPlan d = directPlan(plan);
-  const auto evaluator = makeEvaluator(scene, "bdpt", d.settings.integrator);
+  const auto evaluator = makeEvaluator(scene, d.settings.method, d.settings.integrator);
   PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
   r.samples = 0;  // samples count mutations in a Markov chain job
   return r;

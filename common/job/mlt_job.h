@@ -129,12 +129,21 @@ constexpr int kMaxUnlimitedLength = 1024;
 // The chain's sample-source parameters from resolved settings (large-step probability, kernel; a
 // large-step probability still left to the method is refused by KelemenSource: resolveChainSettings first).
 KelemenParams kelemenParams(const RenderSettings& settings);
+// The direct pass (separateDirect) renders paths of at most kDirectMaxSegments segments with this estimator:
+// a path tracer with next-event estimation and MIS. A pt sample of two segments costs half of bdpt's (1.32 M
+// against 0.63 M samples/s on the Cornell box, one thread), and what bdpt adds for such short paths (light
+// paths splatted to the camera) carries little but noise under the large lights the pilot takes the pass
+// for (direct_light_rule.h). With the size below, the pt pass beat session 31's bdpt pass (0.25 per mutation
+// per pixel) in all 8 cells measured: mmlt and veach-mlt, 16 s, 256x256, 3 seeds, on the four bundled scenes
+// where the pilot takes the pass, 0.71-0.84x (docs/CHAINS.md, "The direct pass: pt, twice as large").
+inline constexpr const char* kDirectPassMethod = "pt";
 // The direct pass's size when the settings leave it to the plan (separateDirect with spp = 0): this many
-// bdpt samples (of at most kDirectMaxSegments segments) per mutation per pixel, rounded up, at least 1.
-// Measured on the Cornell box at 256x256, 16 s, 5 seeds each (docs/CHAINS.md, "--separate-direct"):
-// relMSE 1.95e-3 with 0.25, 2.20e-3 with 0.4, 2.33e-3 with 0.7, 2.58e-3 with 1.2 (mmlt without the pass:
-// 3.02e-3). A ratio, not a share of time: the image stays a pure function of (settings, mutations per pixel).
-constexpr double kDirectSppPerMutation = 0.25;
+// pass samples (of at most kDirectMaxSegments segments) per mutation per pixel, rounded up, at least 1.
+// Measured with the pt pass at 0.25, 0.5 and 1.0 (same runs): 0.5 against 0.25 is 0.47-0.94x for mmlt and
+// 0.73-1.08x for veach-mlt; 1.0 is better still on textured-serialized only (0.74x and 0.93x of 0.5) and
+// worse on the other three. A ratio, not a share of time: the image stays a pure function of (settings,
+// mutations per pixel).
+constexpr double kDirectSppPerMutation = 0.5;
 int directSppFor(double mutationsPerPixel);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0; the
 // direct pass's spp with separateDirect and spp = 0: directSppFor(mutationsPerPixel)).

@@ -268,7 +268,7 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
                                                                100 * r.directShare, r.directCv)
                                                  : std::string("as asked");
     out += separatesDirect(r.settings)
-               ? fmt::format("direct light (paths of at most 2 segments): a bdpt pass of {} samples per pixel ({})\n",
+               ? fmt::format("direct light (paths of at most 2 segments): a pt pass of {} samples per pixel ({})\n",
                              r.settings.spp, pilot)
                : fmt::format("direct light (paths of at most 2 segments): in the chains ({})\n", pilot);
   }

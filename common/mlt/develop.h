@@ -70,9 +70,10 @@
 // same b_k, in a layer of its own (D7), so that an error of the bootstrap's b_k moves only the weights.
 //
 // ---- Direct illumination rendered separately (separateDirect) -------------------------------------
-// Paths of at most kDirectMaxSegments segments are rendered by bdpt (pixel samples + t = 1 splats) and
-// the chains carry only longer paths. bdpt's pixel estimates use the film's pixel buffer (sum / count);
-// its t = 1 splats go to layer 0 and develop with P / N (N = light paths merged, see sample_job.cpp).
+// Paths of at most kDirectMaxSegments segments are rendered by a sample job (kDirectPassMethod, pt: pixel
+// samples; a bdpt pass would add t = 1 splats) and the chains carry only longer paths. Pixel estimates use
+// the film's pixel buffer (sum / count); t = 1 splats go to layer 0 and develop with P / N (N = light paths
+// merged, see sample_job.cpp).
 //
 // ---- Exact merging ----------------------------------------------------------------------------------
 // Each unit's sums are rounded to multiples of 2^-kQuantumExp (stochastic rounding with a hash of (job

@@ -83,13 +83,18 @@ constexpr int candidateAxis(int stream, int coordinate) {
 // first decisions are candidateCoordinate instead.
 class IndependentSource final : public SampleSource {
  public:
-  IndependentSource(uint64_t seed, uint64_t index) : seed_(seed), index_(index) {}
+  IndependentSource(uint64_t seed, uint64_t index) : seed_(seed), index_(index), hash_(seed, index) {}
   static IndependentSource candidate(uint64_t seed, uint64_t index) {
     IndependentSource s(seed, index);
     s.candidate_ = true;
     return s;
   }
-  void reset(uint64_t seed, uint64_t index) { seed_ = seed; index_ = index; pixelPoint_ = false; }
+  void reset(uint64_t seed, uint64_t index) {
+    seed_ = seed;
+    index_ = index;
+    hash_ = HashPrefix2(seed, index);
+    pixelPoint_ = false;
+  }
   // Camera [0,1] (the position in the pixel) read as u instead of hashed numbers, until the next reset
   // (stratifiedPixelPoint: a pixel's samples spread over its area).
   void setPixelPoint(Vec2 u) { pixelPoint_ = true; u_ = u; }
@@ -105,11 +110,12 @@ class IndependentSource final : public SampleSource {
     if (pixelPoint_ && stream == 0 && coordinate < 2) return coordinate == 0 ? u_.x : u_.y;
     if (candidate_)
       if (const int axis = candidateAxis(stream, coordinate); axis >= 0) return candidateCoordinate(seed_, index_, axis);
-    return hashUniform(seed_, index_, static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate));
+    return uniformFromBits(hash_(static_cast<uint64_t>(stream), static_cast<uint64_t>(coordinate)));  // = hashUniform(seed, index, stream, coordinate)
   }
 
  private:
   uint64_t seed_, index_;
+  HashPrefix2 hash_;
   bool candidate_ = false, pixelPoint_ = false;
   Vec2 u_;
   int stream_ = 0, next_ = 0;

@@ -34,7 +34,7 @@ enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s
 enum class MltSplatting { MethodDefault, ExpectedValue, KelemenMIS };
 // How a chain method renders paths of at most two segments (the direct light): Auto, the plan decides
 // from a pilot (common/job/direct_light_rule.h) and holds the value used; Chains, the chains carry them
-// with the rest; Separate, a bdpt pass renders them and the chains carry only longer paths.
+// with the rest; Separate, a pt pass renders them (kDirectPassMethod) and the chains carry only longer paths.
 enum class DirectLight { Auto, Chains, Separate };
 
 // A method's own parameters: name -> value as text (the method's ParamSpec says how to read it).
@@ -61,12 +61,12 @@ struct RenderSettings {
   MutationKernel kernel = MutationKernel::Kelemen;
   float kelemenS1 = 1.0f / 1024, kelemenS2 = 1.0f / 64, gaussianSigma = 0.01f;
   MltSplatting splatting = MltSplatting::MethodDefault;
-  DirectLight directLight = DirectLight::Auto;    // Separate: direct light by bdpt, chains do indirect only
+  DirectLight directLight = DirectLight::Auto;    // Separate: direct light by pt, chains do indirect only
   MethodParams params;                            // the method's own parameters (validated by the method)
   double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
 };
 
-// Whether the job renders its direct light by a bdpt pass (a planned job's settings hold Chains or
+// Whether the job renders its direct light by a pass of its own (a planned job's settings hold Chains or
 // Separate; Auto, not yet decided, counts as no pass).
 inline bool separatesDirect(const RenderSettings& s) { return s.directLight == DirectLight::Separate; }
 

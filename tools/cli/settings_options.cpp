@@ -65,9 +65,9 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
   CLI::Option* directLight =
       add_option("--direct-light", directLight_,
                  "pssmlt-bdpt, mmlt, rjmlt, veach-mlt: who renders paths of up to 2 segments. auto (the default): a "
-                 "pilot of bdpt samples decides before the bootstrap, taking a bdpt pass where the direct light is "
+                 "pilot of bdpt samples decides before the bootstrap, taking a pt pass where the direct light is "
                  "a large and smooth part of the image (docs/CHAINS.md); chains: the chains, with the rest; "
-                 "separate: a bdpt pass (--spp samples; without --spp 0.25 per mutation per pixel, rounded up, "
+                 "separate: a pt pass (--spp samples; without --spp 0.5 per mutation per pixel, rounded up, "
                  "as an automatic pass always is) and the chains only the longer ones (Veach's refinement)")
           ->capture_default_str()
           ->check(CLI::IsMember({"auto", "chains", "separate"}));

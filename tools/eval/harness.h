@@ -26,7 +26,7 @@ namespace mlt::eval {
 
 // "[label=]method[+separate-direct|+direct-in-chains][*scale]": e.g. "pt", "mmlt",
 // "mmlt-sd=mmlt+separate-direct", "pt-biased=pt*1.05". +separate-direct: the method renders the direct
-// light by bdpt (RenderSettings::directLight Separate, the direct pass sized by the plan: directSppFor);
+// light by a pt pass (RenderSettings::directLight Separate, the direct pass sized by the plan: directSppFor);
 // +direct-in-chains: by its chains (Chains); without either the plan decides (Auto, direct_light_rule.h).
 // Both are refused for a method that cannot render the direct light apart. A scale other than 1
 // multiplies every developed image of the method: a test hook for a deliberately biased method.
