@@ -100,7 +100,7 @@ TEST(MltRender, SeparateDirectAgreesWithBdpt) {
   RenderSettings s = cornellSettings("mmlt");
   s.directLight = DirectLight::Separate;
   s.spp = 64;  // the direct pass (same seeds in every run would share its noise otherwise)
-  expectAgreesWithBdpt(s, "mmlt, direct by bdpt");
+  expectAgreesWithBdpt(s, "mmlt, direct by a pt pass");
 }
 
 TEST(MltRender, FurnaceSphereMatchesAnalyticRadiance) {

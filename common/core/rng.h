@@ -27,7 +27,7 @@ inline constexpr uint64_t hashKeys(uint64_t a, Rest... rest) {
 //   step(x, h) = mix64(hashKeys(x) ^ (h + K + (x << 6))),   K = 0x9e3779b97f4a7c15,
 // so what depends on a and b alone is computed once, and hashKeys(x) of small c and d (stream numbers,
 // coordinates) comes from a table: 3 mixes per value instead of 7, bit for bit the same
-// (tests/sample_source_test.cpp, HashPrefix2).
+// (tests/mlt_source_test.cpp, IndependentSource.ValuesAreHashUniformBitForBit).
 class HashPrefix2 {
  public:
   static constexpr uint64_t kSmall = 64;
