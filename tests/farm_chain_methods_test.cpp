@@ -175,7 +175,7 @@ TEST(FarmChainMethods, VeachMltOnTwoWorkersMatchesTheInProcessRenderAndCarriesIt
   for (const std::string& kind : kinds) EXPECT_GT(proposedSomewhere[kind], 0.0) << kind << " never proposed";
 }
 
-// With the direct light rendered separately (issue 12): the chains and the bdpt direct pass's batches run
+// With the direct light rendered separately (issue 12): the chains and the pt direct pass's batches run
 // on the workers, and the image is the in-process one, bit for bit, its metadata saying separateDirect.
 TEST(FarmChainMethods, VeachMltWithSeparateDirectOnTwoWorkersMatchesTheInProcessRender) {
   const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/caustic-mirror.xml",

@@ -1,6 +1,6 @@
 // veach-mlt with the direct light rendered separately (separateDirect; common/methods/veach/veach_job.h):
 // the chains cover only paths of more than kDirectMaxSegments segments (their b, bootstrap and start
-// strategies leave the direct paths out exactly as pssmlt-bdpt's do), the shared bdpt direct pass renders
+// strategies leave the direct paths out exactly as pssmlt-bdpt's do), the shared pt direct pass renders
 // the rest, and the image agrees with bdpt and with veach-mlt without separateDirect.
 //
 // Tolerance as veach_bundled_test: R job seeds per configuration (bootstrap and direct pass included), the

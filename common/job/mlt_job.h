@@ -190,7 +190,8 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 // are already resolved against the scene camera by planJob.
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, const RenderSettings& settings);
 // A unit of the direct pass (separateDirect: sample batches appended after the chains) and how it runs:
-// bdpt with at most kDirectMaxSegments segments (pixel samples + t = 1 splats in layer 0).
+// kDirectPassMethod (pt) with at most kDirectMaxSegments segments (pixel samples; a bdpt pass would add t = 1
+// splats in layer 0).
 bool isDirectUnit(const WorkUnit& unit);
 PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Runs one chain (unit.startCandidate, unit.mutations, ...) and returns its raw splat sums + stats.

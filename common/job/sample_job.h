@@ -30,7 +30,7 @@ class PathEvaluator;
 constexpr int kAutoSampleUnits = 16;
 JobPlan planSampleJob(const RenderSettings& settings);
 // One unit: the plan's samples [unit.sampleBegin, unit.sampleEnd) of every pixel through `evaluator`
-// (the method's: pt, lt, bdpt, or the bdpt direct pass of a chain job).
+// (the method's: pt, lt, bdpt, or the pt direct pass of a chain job).
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit);
 // bdpt only: one film per technique (s, t) with path length L = s + t - 1 in [1, maxLength] (longer
 // paths are left out), for inspecting strategies. Each film holds that technique's MIS-weighted

@@ -127,7 +127,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
   std::vector<WorkUnit> trialUnits, directUnits;
   for (const WorkUnit& u : trialPlan.units) {
     if (u.mutations == 0) {
-      directUnits.push_back(u);  // the direct pass: bdpt sample batches, whose cost does not depend on M
+      directUnits.push_back(u);  // the direct pass: pt sample batches, whose cost does not depend on M
       continue;
     }
     trialUnits.push_back(u);

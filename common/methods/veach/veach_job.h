@@ -17,7 +17,7 @@
 // Develop: (D1) of common/mlt/develop.h, b * P / M with that b.
 // separateDirect (veach-mlt-lecture-cmu: "estimate direct illumination with standard methods ... and apply
 // MLT only for indirect illumination"): paths
-// of at most kDirectMaxSegments segments are rendered by the shared direct pass (bdpt sample batches after
+// of at most kDirectMaxSegments segments are rendered by the shared direct pass (pt sample batches after
 // the chains: isDirectUnit / runDirectUnit of mlt_job.h, layer 0, P / N at develop). The chains' space is
 // the longer paths only (PathSpace minEdges = chainMinLength(true): f = 0 on the shorter, so moves to them
 // are rejected), and their b, bootstrap candidates and start strategies leave the direct paths out as
