@@ -231,7 +231,7 @@ TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
       << r.output;
   const auto& n = readExr(out.string()).metadata.numbers;
   EXPECT_EQ(n.at("separateDirect"), 1.0);
-  EXPECT_EQ(n.at("directSpp"), 1.0);  // 0.25 per mutation per pixel, rounded up (directSppFor)
+  EXPECT_EQ(n.at("directSpp"), 1.0);  // 0.5 per mutation per pixel at 2 mutations per pixel (directSppFor)
   EXPECT_GE(n.at("directLightShare"), kDirectMinShare);
   EXPECT_LE(n.at("directLightCv"), kDirectMaxCv);
 }

@@ -16,15 +16,16 @@ inline constexpr uint64_t mix64(uint64_t z) {
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   return z ^ (z >> 31);
 }
-// Hash of a tuple of 64-bit keys; order matters.
-inline constexpr uint64_t hashKeys(uint64_t a) { return mix64(a + 0x9e3779b97f4a7c15ULL); }
+// Hash of a tuple of 64-bit keys; order matters. kHashOffset: 2^64 / golden ratio.
+inline constexpr uint64_t kHashOffset = 0x9e3779b97f4a7c15ULL;
+inline constexpr uint64_t hashKeys(uint64_t a) { return mix64(a + kHashOffset); }
 template <typename... Rest>
 inline constexpr uint64_t hashKeys(uint64_t a, Rest... rest) {
-  return mix64(hashKeys(a) ^ (hashKeys(static_cast<uint64_t>(rest)...) + 0x9e3779b97f4a7c15ULL + (a << 6)));
+  return mix64(hashKeys(a) ^ (hashKeys(static_cast<uint64_t>(rest)...) + kHashOffset + (a << 6)));
 }
 // hashKeys(a, b, c, d) with (a, b) fixed and c, d varying (a source's seed and index; stream, coordinate).
 // The fold above is hashKeys(a, b, c, d) = step(a, step(b, step(c, hashKeys(d)))) with
-//   step(x, h) = mix64(hashKeys(x) ^ (h + K + (x << 6))),   K = 0x9e3779b97f4a7c15,
+//   step(x, h) = mix64(hashKeys(x) ^ (h + kHashOffset + (x << 6))),
 // so what depends on a and b alone is computed once, and hashKeys(x) of small c and d (stream numbers,
 // coordinates) comes from a table: 3 mixes per value instead of 7, bit for bit the same
 // (tests/mlt_source_test.cpp, IndependentSource.ValuesAreHashUniformBitForBit).
@@ -32,14 +33,13 @@ class HashPrefix2 {
  public:
   static constexpr uint64_t kSmall = 64;
   constexpr HashPrefix2(uint64_t a, uint64_t b)
-      : ha_(hashKeys(a)), ta_(kK + (a << 6)), hb_(hashKeys(b)), tb_(kK + (b << 6)) {}
+      : ha_(hashKeys(a)), ta_(kHashOffset + (a << 6)), hb_(hashKeys(b)), tb_(kHashOffset + (b << 6)) {}
   constexpr uint64_t operator()(uint64_t c, uint64_t d) const {
-    const uint64_t hcd = mix64(small(c) ^ (small(d) + kK + (c << 6)));
+    const uint64_t hcd = mix64(small(c) ^ (small(d) + kHashOffset + (c << 6)));
     return mix64(ha_ ^ (mix64(hb_ ^ (hcd + tb_)) + ta_));
   }
 
  private:
-  static constexpr uint64_t kK = 0x9e3779b97f4a7c15ULL;
   struct Table {
     uint64_t h[kSmall];
   };

@@ -224,7 +224,8 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
                    "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
-                   spec.name(), p.separate ? "by a pt pass (--direct-light separate)" : "in the chains (--direct-light chains)",
+                   spec.name(), p.separate ? fmt::format("by a {} pass (--direct-light separate)", kDirectPassMethod)
+                              : std::string("in the chains (--direct-light chains)"),
                    p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
                    p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
     }
@@ -453,7 +454,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
                "refined as the chains run",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
-               separatesDirect(s) ? ", direct light by pt" : "");
+               separatesDirect(s) ? fmt::format(", direct light by {}", kDirectPassMethod) : std::string());
   return plan;
 }
 

@@ -141,7 +141,7 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   const RenderSettings& s = r.settings;
   m.numbers["largeStepProb"] = s.largeStepProb;
   m.numbers["separateDirect"] = separatesDirect(s) ? 1 : 0;
-  if (separatesDirect(s)) m.numbers["directSpp"] = s.spp;  // the pass's bdpt samples per pixel
+  if (separatesDirect(s)) m.numbers["directSpp"] = s.spp;  // the pass's samples per pixel
   if (r.directShare >= 0) {  // the plan chose it (--direct-light auto): what the pilot measured
     m.numbers["directLightShare"] = r.directShare;
     m.numbers["directLightCv"] = r.directCv;
@@ -268,9 +268,10 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
                                                                100 * r.directShare, r.directCv)
                                                  : std::string("as asked");
     out += separatesDirect(r.settings)
-               ? fmt::format("direct light (paths of at most 2 segments): a pt pass of {} samples per pixel ({})\n",
-                             r.settings.spp, pilot)
-               : fmt::format("direct light (paths of at most 2 segments): in the chains ({})\n", pilot);
+               ? fmt::format("direct light (paths of at most {} segments): a {} pass of {} samples per pixel ({})\n",
+                             kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
+               : fmt::format("direct light (paths of at most {} segments): in the chains ({})\n", kDirectMaxSegments,
+                             pilot);
   }
   const std::string rates = formatMoveRates(r);
   if (!rates.empty()) out += fmt::format("mutations/s per move, one thread: {}\n", rates);

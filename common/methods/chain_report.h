@@ -9,7 +9,7 @@
 //   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
-//   largeStepProb, separateDirect (0/1: the plan's choice) and with it directSpp (the pass's bdpt samples
+//   largeStepProb, separateDirect (0/1: the plan's choice) and with it directSpp (the pass's samples
 //   per pixel), with --direct-light auto the pilot's
 //   directLightShare and directLightCv (common/job/direct_light_rule.h), kernelS1 + kernelS2 or kernelSigma;
 //   mmlt per path length k: b<k>, bStdErr<k>, chains<k>, mutations<k>, acceptance<k>.
