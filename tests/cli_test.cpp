@@ -3,6 +3,7 @@
 // chain render prints its summary (b, acceptance, mutations/s); a time-budgeted one records the mutations
 // per pixel it chose, and rendering with that value reproduces the image bit for bit.
 // The executable is found next to this test's build directory (BUILD/tools/mltfarm).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -19,6 +20,8 @@
 
 #include "common/io/exr_io.h"
 #include "common/job/direct_light_rule.h"
+#include "common/job/mlt_job.h"
+#include "common/methods/pss_method.h"
 
 namespace mlt {
 namespace {
@@ -226,12 +229,18 @@ TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
                                                      "the pilot's [0-9]+ bdpt samples")))
       << r.output;
   // The summary, printed from the image's metadata (as after a farm render), says it too.
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("direct light \\(paths of at most 2 segments\\): a pt pass of 1 "
-                                                     "samples per pixel \\(the pilot's choice: [0-9.]+% of the light")))
-      << r.output;
   const auto& n = readExr(out.string()).metadata.numbers;
   EXPECT_EQ(n.at("separateDirect"), 1.0);
-  EXPECT_EQ(n.at("directSpp"), 1.0);  // 0.5 per mutation per pixel at 2 mutations per pixel (directSppFor)
+  // Sized by the pilot's share (mlt_job.h, directSppPerMutation) at 2 mutations per pixel, and the log says so.
+  DirectLightPilot pilot;
+  pilot.share = n.at("directLightShare");
+  const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), &pilot), 2);
+  EXPECT_EQ(n.at("directSpp"), double(spp));
+  EXPECT_NE(r.output.find(fmt::format("mmlt: the pt pass gets {} samples per pixel: ", spp)), std::string::npos) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(fmt::format("direct light \\(paths of at most 2 segments\\): a pt "
+                                                                 "pass of {} samples per pixel \\(the pilot's choice: "
+                                                                 "[0-9.]+% of the light", spp))))
+      << r.output;
   EXPECT_GE(n.at("directLightShare"), kDirectMinShare);
   EXPECT_LE(n.at("directLightCv"), kDirectMaxCv);
 }

@@ -122,7 +122,12 @@ TEST(DirectLightRule, AutoIsThePlansExplicitChoice) {
     const bool apart = findChainJobSpec(method)->allowsSeparateDirect();
     EXPECT_EQ(automatic.settings.directLight, apart ? DirectLight::Separate : DirectLight::Chains) << method;
     EXPECT_EQ(automatic.norm.directShare >= 0, apart) << method;
-    if (apart) EXPECT_EQ(automatic.settings.spp, directSppFor(s.mutationsPerPixel));
+    if (apart) {
+      DirectLightPilot pilot;
+      pilot.share = automatic.norm.directShare;
+      EXPECT_EQ(automatic.settings.spp,
+                directSppFor(directSppPerMutation(*findChainJobSpec(method), &pilot), s.mutationsPerPixel));
+    }
 
     RenderSettings explicitChoice = s;
     explicitChoice.directLight = automatic.settings.directLight;

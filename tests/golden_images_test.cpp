@@ -56,6 +56,11 @@
 //    cannot render it apart, the digests are unchanged: the pilot draws numbers of its own.
 //  - The same seven again: the direct pass is pt instead of bdpt, and twice as large (kDirectPassMethod,
 //    kDirectSppPerMutation). The chains are the same; every other digest unchanged.
+//  - pssmlt-bdpt on cornell-box, and pssmlt-bdpt, mmlt and rjmlt on cornell-variety: the pass's size
+//    follows the pilot's share of the light in the pass's paths (mlt_job.h, directSppPerMutation;
+//    pssmlt-bdpt's mutations priced at 4 of mmlt's), and the pilot's share takes 4096 samples instead of
+//    1024. The other three with a pass got the same spp at this budget;
+//    where the pilot keeps the chains the digests are unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -205,7 +210,7 @@ const Case kCases[] = {
     Case{"cornell-box", "lt", "aac1d685dbcbddd5940fe1adc62a37adce95225788e2baf91d2b8172fc75016b"},
     Case{"cornell-box", "bdpt", "19e44f5ee9a6a65d66f3f3683d31d73c905c14a4c5b4ff3e1d57be0037ddc9e4"},
     Case{"cornell-box", "pssmlt", "ef8317bc4767724fcbb5fda5e056a3ee9a0fbda0a2273ac4920390f79ba028ac"},
-    Case{"cornell-box", "pssmlt-bdpt", "a21374f013012981b5048de7e3f48b21f1fd66fc46f1485498ffd4f48ef1f16c"},
+    Case{"cornell-box", "pssmlt-bdpt", "4122aee77224cf828a05538c35967ae46b7dd458418be7d3ec5856de95241b5a"},
     Case{"cornell-box", "mmlt", "d3b08e113df76ec60f7a1b4f86a5e7eed34350d9ae14f67d0b16453d7ba2be03"},
     Case{"caustic-mirror", "pt", "1f47d49c9699d18775c3fea75c4e03076cdc895d83bad773cec3c631845d6cd1"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
@@ -223,12 +228,12 @@ const Case kCases[] = {
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
     Case{"cornell-variety", "bdpt", "567a7a36a7eb29d624ac83ba717b88bc55936cf8bd2fa07b5d4f501b68fbfda3"},
     Case{"cornell-variety", "pssmlt", "6b5e05fbd403a2a715ee3c23bd92309bc72dc7a19fba48edb7690847b5a749d5"},
-    Case{"cornell-variety", "pssmlt-bdpt", "128a14130718196aa7ce0ebcf0cc1d5fa317ecf5a451f21c6b2b9cb754533e25"},
-    Case{"cornell-variety", "mmlt", "c057fbeb2c29c69fa8fda169d02373a6b6b86c8766922aa29eda721ed6dc749e"},
+    Case{"cornell-variety", "pssmlt-bdpt", "3c5ea9f179b75c8f85b13e105b604fb9ed7b8a671799bdbaa9661f85bfed814e"},
+    Case{"cornell-variety", "mmlt", "008d29b37fa75b798cadf2f08f654b1bb3cafd5bbb3f2de68a4a1c7725895873"},
     Case{"cornell-box", "rjmlt", "928ae321988cd9c24472e7e640bc0b1ace76e0934557cbaee951a714fb203685"},
     Case{"caustic-mirror", "rjmlt", "f1673290bd9f401f70d3ad1a63e88e2d5e737c80d427f2481403aa9ee229fff4"},
     Case{"glossy-plates", "rjmlt", "c657067a811006e5ffb0b9e6c7054bfdf489e83cce6dc5577f77cbe6af484a3d"},
-    Case{"cornell-variety", "rjmlt", "6cfced545dc0b86be0872d053800641092ef441f4525e80cafbc98964e4c8a09"},
+    Case{"cornell-variety", "rjmlt", "3106e6df860956d33d86d616b0176f4fcaff2a7e90bf47b64f2f8574e64f3079"},
     Case{"cornell-box", "veach-mlt", "10fdc945cd5118a698ff5a29b273148b7bfd392f96bf018c2ff40bd02840dc7e"},
     Case{"caustic-mirror", "veach-mlt", "758dca418217312995a2204d2b7e0030c3620f6fd402e0780ec26eb5fd6457af"},
     Case{"glossy-plates", "veach-mlt", "7d956680fe78e854c13919c4a7daf77068aac266ef9f7f4aa7f78fa27b99a372"},

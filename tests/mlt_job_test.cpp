@@ -162,21 +162,26 @@ TEST(MltJob, SplattingIsTheMethodsUnlessGiven) {
   }
 }
 
-// separateDirect without spp (spp = 0): the plan sizes the direct pass from the mutations per pixel, and
-// the plan is the one an explicit spp of that size gives, unit for unit and pixel for pixel. The plan
-// records the resolved spp (an EXR's metadata reproduces the job); a negative spp is refused.
+// separateDirect without spp (spp = 0): the plan sizes the direct pass from the mutations per pixel and the
+// pilot's share (run for the size alone when the pass was asked for), and the plan is the one an explicit
+// spp of that size gives, unit for unit and pixel for pixel. The plan records the resolved spp (an EXR's
+// metadata reproduces the job); a negative spp is refused.
 TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
-  EXPECT_EQ(directSppFor(8), int(std::ceil(kDirectSppPerMutation * 8)));
-  EXPECT_EQ(directSppFor(0.01), 1);
-  EXPECT_EQ(directSppFor(100), int(std::ceil(kDirectSppPerMutation * 100)));
+  EXPECT_EQ(directSppFor(0.5, 8), 4);
+  EXPECT_EQ(directSppFor(0.5, 0.01), 1);
+  EXPECT_EQ(directSppFor(0.47, 100), 47);
+  EXPECT_EQ(directSppFor(0.471, 100), 48);  // rounded up
   for (double mpp : {8.0, 30.0}) {
     RenderSettings s = settingsFor("mmlt", 3);
     s.directLight = DirectLight::Separate;
     s.mutationsPerPixel = mpp;
     s.spp = 0;
     const JobPlan automatic = planJob(cornell(), s);
-    EXPECT_EQ(automatic.settings.spp, directSppFor(mpp));
-    s.spp = directSppFor(mpp);
+    const DirectLightPilot pilot = directLightPilot(cornell(), automatic.settings);  // the film resolved
+    const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), &pilot), mpp);
+    EXPECT_EQ(automatic.settings.spp, spp);
+    EXPECT_LT(automatic.norm.directShare, 0);  // asked for, not the pilot's choice: no share recorded
+    s.spp = spp;
     const JobPlan given = planJob(cornell(), s);
     ASSERT_EQ(automatic.units.size(), given.units.size());
     size_t direct = 0;
@@ -198,6 +203,31 @@ TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
   bad.directLight = DirectLight::Separate;
   bad.spp = -1;
   EXPECT_THROW(planJob(cornell(), bad), std::invalid_argument);
+}
+
+// The pass's samples per mutation per pixel (mlt_job.h, directSppPerMutation): in proportion to the odds
+// s / (1 - s) of the pilot's share s of the light in the pass's paths, capped at kDirectMaxShareOdds, and to
+// the method's mutation cost; without a pilot, kDirectSppPerMutation times that cost.
+TEST(MltJob, DirectPassSizeFollowsTheShareOfTheLightItRenders) {
+  const ChainJobSpec& mmlt = *findChainJobSpec("mmlt");
+  const ChainJobSpec& bidir = *findChainJobSpec("pssmlt-bdpt");
+  DirectLightPilot p;
+  p.share = 0.8;  // odds 4
+  EXPECT_NEAR(directSppPerMutation(mmlt, &p), 4 * kDirectSppPerShareOdds, 1e-12);
+  p.share = 0.9;  // odds 9: a scene whose chains carry half the light of the one above gets ~2.25x the pass
+  EXPECT_NEAR(directSppPerMutation(mmlt, &p), 9 * kDirectSppPerShareOdds, 1e-9);
+  EXPECT_NEAR(directSppPerMutation(bidir, &p), bidir.mutationCost() * 9 * kDirectSppPerShareOdds, 1e-9);
+  for (double share : {0.96, 0.999, 1.0}) {
+    p.share = share;
+    EXPECT_EQ(directSppPerMutation(mmlt, &p), kDirectMaxShareOdds * kDirectSppPerShareOdds) << share;
+  }
+  p.share = 0;
+  EXPECT_EQ(directSppPerMutation(mmlt, &p), 0.0);  // still at least one sample per pixel (directSppFor)
+  EXPECT_EQ(directSppFor(directSppPerMutation(mmlt, &p), 10), 1);
+  EXPECT_EQ(directSppPerMutation(mmlt, nullptr), kDirectSppPerMutation);
+  EXPECT_EQ(directSppPerMutation(bidir, nullptr), bidir.mutationCost() * kDirectSppPerMutation);
+  EXPECT_GT(bidir.mutationCost(), 1.0);  // a whole bdpt sample per mutation
+  EXPECT_EQ(findChainJobSpec("rjmlt")->mutationCost(), 1.0);
 }
 
 TEST(MltJob, ReplayMismatchFailsLoudly) {

@@ -13,6 +13,7 @@
 
 #include "common/job/mlt_job.h"
 #include "common/methods/image_metadata.h"
+#include "common/methods/pss_method.h"
 #include "common/methods/registry.h"
 #include "common/methods/veach/veach_chain.h"
 #include "common/methods/veach/veach_job.h"
@@ -209,7 +210,9 @@ TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   s.spp = -1;  // not a size (0 is: the plan sizes the direct pass, directSppFor)
   EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
   s.spp = 0;
-  EXPECT_EQ(veach::planVeachJob(*box, s).settings.spp, directSppFor(s.mutationsPerPixel));
+  const DirectLightPilot pilot = directLightPilot(*box, s);  // the pass is sized by its share
+  EXPECT_EQ(veach::planVeachJob(*box, s).settings.spp,
+            directSppFor(directSppPerMutation(*findChainJobSpec("veach-mlt"), &pilot), s.mutationsPerPixel));
   // Point and spot lights are supported (path.h); directional and environment lights are refused, the
   // message naming the light and its type.
   const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));

@@ -59,8 +59,15 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
   return lengths;
 }
 
-int directSppFor(double mutationsPerPixel) {
-  const double spp = std::ceil(kDirectSppPerMutation * mutationsPerPixel);
+double directSppPerMutation(const ChainJobSpec& spec, const DirectLightPilot* pilot) {
+  if (!pilot) return spec.mutationCost() * kDirectSppPerMutation;
+  const double s = std::clamp(pilot->share, 0.0, 1.0);
+  const double odds = s < 1 ? std::min(s / (1 - s), kDirectMaxShareOdds) : kDirectMaxShareOdds;
+  return spec.mutationCost() * kDirectSppPerShareOdds * odds;
+}
+
+int directSppFor(double sppPerMutation, double mutationsPerPixel) {
+  const double spp = std::ceil(sppPerMutation * mutationsPerPixel);
   return std::isfinite(spp) ? int(std::clamp(spp, 1.0, double(1 << 24))) : 1;
 }
 
@@ -74,7 +81,6 @@ RenderSettings withDirectLightChoice(RenderSettings s, DirectLight chosen) {
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings s) {
   if (s.largeStepProb < 0) s.largeStepProb = spec.defaultLargeStepProb();
   if (s.splatting == MltSplatting::MethodDefault) s.splatting = spec.defaultSplatting();
-  if (separatesDirect(s) && s.spp == 0) s.spp = directSppFor(s.mutationsPerPixel);
   return s;
 }
 
@@ -210,17 +216,20 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
   // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.
   RenderSettings resolved = settings;
+  const auto runPilot = [&]() {
+    if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings)) {
+      out.pilot = earlier->pilot;
+      out.pilot->seconds = 0;  // not run again
+    } else {
+      out.pilot = directLightPilot(scene, settings);
+    }
+    return *out.pilot;
+  };
   if (settings.directLight == DirectLight::Auto) {
     if (!spec.allowsSeparateDirect()) {
       resolved = withDirectLightChoice(settings, DirectLight::Chains);
     } else {
-      if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings)) {
-        out.pilot = earlier->pilot;
-        out.pilot->seconds = 0;  // not run again
-      } else {
-        out.pilot = directLightPilot(scene, settings);
-      }
-      const DirectLightPilot& p = *out.pilot;
+      const DirectLightPilot p = runPilot();
       resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
                    "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
@@ -229,6 +238,13 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
                    p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
                    p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
     }
+  } else if (separatesDirect(settings) && settings.spp == 0) {
+    // The pass asked for, its size left to the plan: sized by the pilot's share like a chosen one.
+    const DirectLightPilot p = runPilot();
+    spdlog::info("{}: the {} pass (--direct-light separate) is sized by the pilot's share: {} bdpt samples put {:.1f}% "
+                 "of the light in paths of at most {} segments ({})", spec.name(), kDirectPassMethod, p.samples,
+                 100 * p.share, kDirectMaxSegments,
+                 p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
   }
   const RenderSettings& s = resolved;  // valid as `settings` was: the pass is chosen only where allowed
   out.settings = s;
@@ -373,8 +389,16 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*/, const RenderSettings& settings,
                            const MarkovChainBootstrap& bootstrap) {
   // Auto: as the bootstrap decided (bootstrapMarkovChainJob). The plan holds the values used.
-  const RenderSettings s =
-      resolveChainSettings(spec, withDirectLightChoice(settings, bootstrap.settings.directLight));
+  RenderSettings s = resolveChainSettings(spec, withDirectLightChoice(settings, bootstrap.settings.directLight));
+  if (separatesDirect(s) && s.spp == 0) {  // the pass sized by the plan: by the pilot's share where there is one
+    const DirectLightPilot* pilot = bootstrap.pilot ? &*bootstrap.pilot : nullptr;
+    const double r = directSppPerMutation(spec, pilot);
+    s.spp = directSppFor(r, s.mutationsPerPixel);
+    spdlog::info("{}: the {} pass gets {} samples per pixel: {:.3g} per mutation per pixel ({}; mutation cost {:g})",
+                 spec.name(), kDirectPassMethod, s.spp, r,
+                 pilot ? fmt::format("the pilot's share {:.1f}% of the light", 100 * pilot->share)
+                       : std::string("no pilot"), spec.mutationCost());
+  }
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
   if (s.chains < 0) throw std::invalid_argument("settings: chains must be >= 0, got " + std::to_string(s.chains));
@@ -392,7 +416,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   norm.bStdErr = boot.bStdErr;
   norm.bootstrapSamples = boot.candidates;
   norm.bootstrapSeconds = boot.seconds;
-  if (bootstrap.pilot) {
+  if (bootstrap.pilot && settings.directLight == DirectLight::Auto) {  // the pilot chose (else it only sized the pass)
     norm.directShare = bootstrap.pilot->share;
     norm.directCv = bootstrap.pilot->cv;
   }

@@ -62,6 +62,10 @@ class ChainJobSpec {
     (void)settings;
     return 1.0;
   }
+  // What one of the chain's mutations costs in mmlt mutations: the direct pass gets this many times mmlt's
+  // samples per mutation (directSppPerMutation), so that it takes the same share of a job's time whatever
+  // the method. 1 unless a method measured otherwise.
+  virtual double mutationCost() const { return 1.0; }
   // The settings to plan again with when the bootstrap finds nothing for the chains to carry (b = 0, no
   // chain); nullopt (the default): the job is rightly black. veach-mlt: its light-view pass off, since
   // without chains nothing would carry it (veach_job.h).
@@ -90,8 +94,9 @@ struct MarkovChainBootstrap {
   // settings, so a second bootstrap of the same job (a --time budget's final one after its probe) takes it
   // instead of tracing the rays again (bootstrapMarkovChainJob's `earlier`).
   std::optional<EmissionEstimate> emission;
-  // DirectLight::Auto: the pilot that chose settings.directLight (direct_light_rule.h); also a pure function
-  // of the scene, the seed, the film and the integrator settings, so a second bootstrap takes it.
+  // DirectLight::Auto: the pilot that chose settings.directLight (direct_light_rule.h); DirectLight::Separate
+  // with spp 0: the pilot whose share sizes the pass (directSppPerMutation). Also a pure function of the
+  // scene, the seed, the film and the integrator settings, so a second bootstrap takes it.
   std::optional<DirectLightPilot> pilot;
 };
 
@@ -137,16 +142,31 @@ KelemenParams kelemenParams(const RenderSettings& settings);
 // per pixel) in all 8 cells measured: mmlt and veach-mlt, 16 s, 256x256, 3 seeds, on the four bundled scenes
 // where the pilot takes the pass, 0.71-0.84x (docs/CHAINS.md, "The direct pass: pt, twice as large").
 inline constexpr const char* kDirectPassMethod = "pt";
-// The direct pass's size when the settings leave it to the plan (separateDirect with spp = 0): this many
-// pass samples (of at most kDirectMaxSegments segments) per mutation per pixel, rounded up, at least 1.
-// Measured with the pt pass at 0.25, 0.5 and 1.0 (same runs): 0.5 against 0.25 is 0.47-0.94x for mmlt and
-// 0.73-1.08x for veach-mlt; 1.0 is better still on textured-serialized only (0.74x and 0.93x of 0.5) and
-// worse on the other three. A ratio, not a share of time: the image stays a pure function of (settings,
-// mutations per pixel).
+// The direct pass's size when the settings leave it to the plan (separateDirect with spp = 0): pass samples
+// (of at most kDirectMaxSegments segments) per mutation per pixel, times the mutations per pixel, rounded
+// up, at least 1 (directSppFor). Per mutation, so that the image stays a pure function of (settings,
+// mutations per pixel); the ratio (directSppPerMutation) is
+//     r = mutationCost x kDirectSppPerShareOdds x min(s / (1 - s), kDirectMaxShareOdds),
+// s the pilot's share of the light in the pass's paths (direct_light_rule.h), mutationCost the method's
+// mutation in mmlt mutations (ChainJobSpec::mutationCost). The time the pass and the chains get is then
+// in proportion to the share of the light each renders, t_pass / t_chains ~ s / (1 - s): the optimal
+// split of a fixed time between two independent estimators of the two parts of a sum, when their noise
+// relative to what each estimates falls alike with time (Neyman allocation with equal relative
+// deviations). kDirectSppPerShareOdds is fitted to the Cornell box, whose best fixed ratio was 0.5 (share
+// 0.765, odds 3.3); the other three bundled scenes that take the pass then get 0.39 (cornell-spheres, share
+// 0.72), 0.78 (checker-spheres, 0.84) and 1.5 (textured-serialized, 0.91), where fixed ratios of 0.25,
+// 0.5 and 1.0 had put each scene's best (docs/CHAINS.md, "The pass sized by the light it renders"). The
+// odds are capped at kDirectMaxShareOdds (a share of 0.95), beyond what was measured. The bootstrap runs
+// the pilot whenever the plan sizes a pass (--direct-light auto, or separate without --spp); without one
+// (a plan from a bootstrap that had none) the ratio is mutationCost x kDirectSppPerMutation, the Cornell
+// box's.
+constexpr double kDirectSppPerShareOdds = 0.15;
+constexpr double kDirectMaxShareOdds = 19;
 constexpr double kDirectSppPerMutation = 0.5;
-int directSppFor(double mutationsPerPixel);
-// The settings with the method's defaults filled in where they were left to it (largeStepProb < 0; the
-// direct pass's spp with separateDirect and spp = 0: directSppFor(mutationsPerPixel)).
+double directSppPerMutation(const ChainJobSpec& spec, const DirectLightPilot* pilot);
+int directSppFor(double sppPerMutation, double mutationsPerPixel);
+// The settings with the method's defaults filled in where they were left to it (largeStepProb < 0,
+// splatting). The direct pass's size (spp 0) is left to the plan, which has the pilot: directSppFor.
 RenderSettings resolveChainSettings(const ChainJobSpec& spec, RenderSettings settings);
 // Settings whose directLight is Auto with `chosen` (Chains or Separate) in its place, the one way Auto is
 // resolved (the bootstrap's pilot, the plan, a time budget's sizing): an automatic pass is sized by the

@@ -150,7 +150,8 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
     directSeconds = std::chrono::duration<double>(Clock::now() - t0).count() * double(directUnits.size()) /
                     double(std::max(threads, 1));
     if (s.spp == 0 || s.directLight == DirectLight::Auto) {  // sized by the plan: grows with the mutations
-      directSecondsPerMpp = directSeconds / double(trialPlan.settings.spp) * kDirectSppPerMutation;
+      directSecondsPerMpp = directSeconds / double(trialPlan.settings.spp) *
+                            directSppPerMutation(*method, boot.pilot ? &*boot.pilot : nullptr);
       directSeconds = 0;
     }
   }
