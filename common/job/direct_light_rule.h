@@ -30,8 +30,9 @@
 // settings (not of the thread count), so the resolved choice given explicitly reproduces the job.
 // The share also sizes the pass (mlt_job.h, directSppPerMutation), in its odds s / (1 - s), which is why
 // it takes 4096 samples: with 1024 the Cornell box's share ranged 64-83% over 8 seeds (a pass of 18 to 48
-// samples per 100 mutations per pixel), with 8192 75.7-77.6% over 6. The pilot costs 0.03-0.05 s of one
-// thread at 256x256 on the bundled scenes; it counts as part of the bootstrap.
+// samples per 100 mutations per pixel), with 4096 74.1-79.8% over 3, with 8192 75.7-77.6% over 6. The
+// pilot costs 0.03-0.055 s of one thread at 256x256 on the bundled scenes; it counts as part of the
+// bootstrap.
 #pragma once
 #include <cstdint>
 

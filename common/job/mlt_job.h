@@ -155,7 +155,9 @@ inline constexpr const char* kDirectPassMethod = "pt";
 // deviations). kDirectSppPerShareOdds is fitted to the Cornell box, whose best fixed ratio was 0.5 (share
 // 0.765, odds 3.3); the other three bundled scenes that take the pass then get 0.39 (cornell-spheres, share
 // 0.72), 0.78 (checker-spheres, 0.84) and 1.5 (textured-serialized, 0.91), where fixed ratios of 0.25,
-// 0.5 and 1.0 had put each scene's best (docs/CHAINS.md, "The pass sized by the light it renders"). The
+// 0.5 and 1.0 had put each scene's best (docs/CHAINS.md, "The pass sized by the light it renders").
+// Against the fixed 0.5, paired 16-s runs at 256x256: pssmlt-bdpt 0.68x (0.42x on textured-serialized),
+// mmlt 0.71x and rjmlt 0.50x on textured-serialized, the other cells within the runs' noise. The
 // odds are capped at kDirectMaxShareOdds (a share of 0.95), beyond what was measured. The bootstrap runs
 // the pilot whenever the plan sizes a pass (--direct-light auto, or separate without --spp); without one
 // (a plan from a bootstrap that had none) the ratio is mutationCost x kDirectSppPerMutation, the Cornell
