@@ -67,8 +67,9 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
                  "pssmlt-bdpt, mmlt, rjmlt, veach-mlt: who renders paths of up to 2 segments. auto (the default): a "
                  "pilot of bdpt samples decides before the bootstrap, taking a pt pass where the direct light is "
                  "a large and smooth part of the image (docs/CHAINS.md); chains: the chains, with the rest; "
-                 "separate: a pt pass (--spp samples; without --spp 0.5 per mutation per pixel, rounded up, "
-                 "as an automatic pass always is) and the chains only the longer ones (Veach's refinement)")
+                 "separate: a pt pass (--spp samples; without --spp 0.15 s / (1 - s) per mutation per pixel, s the "
+                 "pilot's share of the light in those paths, 4x that for pssmlt-bdpt, rounded up, as an automatic "
+                 "pass always is) and the chains only the longer ones (Veach's refinement)")
           ->capture_default_str()
           ->check(CLI::IsMember({"auto", "chains", "separate"}));
   add_flag("--separate-direct", separateDirect_, "The same as --direct-light separate")->excludes(directLight);
@@ -137,8 +138,9 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.gaussianSigma = sigma_;
   s.splatting = splattingFromName(splatting_).value();  // empty or one of the names --splatting accepts
   s.directLight = separateDirect_ ? DirectLight::Separate : directLightFromName(directLight_).value();  // a name --direct-light accepts
-  // The direct pass without --spp: sized by the plan from the mutations per pixel (directSppFor), also under
-  // a time budget; the scene's sampler sample_count is meant for pt and bdpt.
+  // The direct pass without --spp: sized by the plan from the mutations per pixel and the pilot's share of the
+  // light (directSppPerMutation, directSppFor), also under a time budget; the scene's sampler sample_count
+  // is meant for pt and bdpt.
   if (separatesDirect(s) && !out.hasSpp) s.spp = 0;
   // Given depths go into the settings too; unset ones keep IntegratorSettings' defaults and are resolved
   // against the scene's <integrator> by whoever loads it (the in-process renderer or the coordinator).
