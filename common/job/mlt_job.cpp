@@ -225,6 +225,9 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     }
     return *out.pilot;
   };
+  const auto pilotCost = [](const DirectLightPilot& p) {
+    return p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot");
+  };
   if (settings.directLight == DirectLight::Auto) {
     if (!spec.allowsSeparateDirect()) {
       resolved = withDirectLightChoice(settings, DirectLight::Chains);
@@ -236,15 +239,14 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
                    spec.name(), p.separate ? fmt::format("by a {} pass (--direct-light separate)", kDirectPassMethod)
                               : std::string("in the chains (--direct-light chains)"),
                    p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
-                   p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
+                   pilotCost(p));
     }
   } else if (separatesDirect(settings) && settings.spp == 0) {
-    // The pass asked for, its size left to the plan: sized by the pilot's share like a chosen one.
+    // The pass asked for, its size left to the plan: sized by the pilot's share like a chosen one (the plan
+    // logs the share and the size).
     const DirectLightPilot p = runPilot();
-    spdlog::info("{}: the {} pass (--direct-light separate) is sized by the pilot's share: {} bdpt samples put {:.1f}% "
-                 "of the light in paths of at most {} segments ({})", spec.name(), kDirectPassMethod, p.samples,
-                 100 * p.share, kDirectMaxSegments,
-                 p.seconds > 0 ? fmt::format("{:.3f} s", p.seconds) : std::string("an earlier bootstrap's pilot"));
+    spdlog::info("{}: the {} pass (--direct-light separate) is sized by a pilot of {} bdpt samples ({})", spec.name(),
+                 kDirectPassMethod, p.samples, pilotCost(p));
   }
   const RenderSettings& s = resolved;  // valid as `settings` was: the pass is chosen only where allowed
   out.settings = s;
