@@ -111,6 +111,53 @@ TEST(SparseSplats, InOrderMergeOfUnitsIsBitIdenticalToTheDenseMerge) {
   EXPECT_TRUE(fresh.film.hasSplatLayer(2));
 }
 
+// Whatever the unit's size: from fewer splats than the splatter defers (kDelay) to more pixels than it
+// sorts (the list is then read off the touched bytes), with addAt between the splats, the unit equals the
+// same calls on a dense film, in the same order, pixel for pixel.
+TEST(SparseSplats, UnitsOfEverySizeEqualTheDenseCallsInOrder) {
+  constexpr int W2 = 601, H2 = 499;  // sorted below W2 * H2 / 256 = 1171 touched pixels, scanned above
+  for (int n : {1, 3, 8, 9, 17, 400, 3000, 60000}) {
+    std::mt19937 rng{uint32_t(n)};
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    SparseSplatter splatter(W2, H2, 2);
+    Film dense(W2, H2);
+    std::vector<RGBd>& layer = dense.splatLayer(2);
+    Vec2 last{0.5f, 0.5f};
+    for (int i = 0; i < n; ++i) {
+      const Vec2 p{u(rng) * W2, u(rng) * H2};
+      if (i % 13 == 5) {  // an exact add (the b strata's kind) on the pixel of splats still deferred
+        const size_t pixel = size_t(filmPixelIndex(last, W2, H2));
+        const RGBd v{u(rng), 1e-9 * u(rng), 3.0};
+        splatter.addAt(pixel, v);
+        layer[pixel] += v;
+        continue;
+      }
+      const Color v(std::ldexp(u(rng), int(u(rng) * 40) - 20), u(rng), 1.f);
+      splatter.addSplat(p, v);
+      dense.addSplat(p, v, 2);
+      last = p;
+      if (i % 3 == 0) {  // the same pixel again: a rejected proposal's repeat
+        splatter.addSplat(p, v * 3.f);
+        dense.addSplat(p, v * 3.f, 2);
+      }
+    }
+    const SparseSplats taken = splatter.take();
+    const auto& l = taken.layers.at(0);
+    ASSERT_TRUE(std::is_sorted(l.index.begin(), l.index.end())) << n << " splats";
+    ASSERT_TRUE(std::adjacent_find(l.index.begin(), l.index.end()) == l.index.end()) << n << " splats";
+    size_t listed = 0;
+    for (size_t pixel = 0; pixel < layer.size(); ++pixel) {
+      const bool isListed = listed < l.index.size() && l.index[listed] == pixel;
+      const RGBd want = layer[pixel];
+      const RGBd got = isListed ? l.value[listed] : RGBd{};
+      ASSERT_EQ(std::memcmp(&want, &got, sizeof(RGBd)), 0) << n << " splats, pixel " << pixel;
+      if (!isListed) ASSERT_TRUE(want.r == 0 && want.g == 0 && want.b == 0) << n << " splats, pixel " << pixel;
+      listed += isListed;
+    }
+    EXPECT_EQ(listed, l.index.size());
+  }
+}
+
 TEST(SparseSplats, ALayerWithoutPixelsIsStillAllocated) {
   SparseSplatter splatter(W, H, 3);
   splatter.addSplat({-5.f, 2.f}, Color(1));  // off the film only

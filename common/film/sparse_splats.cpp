@@ -2,6 +2,8 @@
 #include "common/film/sparse_splats.h"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -59,6 +61,39 @@ SparseSplatter::SparseSplatter(int width, int height, uint32_t layer) : width_(w
   list_->clear();
 }
 
+void SparseSplatter::flush() {
+  const uint64_t first = nQueued_ > kDelay ? nQueued_ - kDelay : 0;
+  for (uint64_t q = first; q < nQueued_; ++q) apply(pending_[q % kDelay].pixel, pending_[q % kDelay].v);
+  nQueued_ = 0;
+}
+
+// Ascending pixel order. A chain unit touches thousands of pixels: reading the touched bytes eight at a
+// time (a 256x256 film: 8192 words) costs a few microseconds where sorting the list cost a few hundred
+// (2.3% of an mmlt job's time); a short list is sorted.
+void SparseSplatter::sortedList() {
+  std::vector<uint32_t>& list = *list_;
+  const size_t pixels = size_t(width_) * size_t(height_);
+  if (list.size() < pixels / 256) {
+    std::sort(list.begin(), list.end());
+    return;
+  }
+  static_assert(std::endian::native == std::endian::little, "the word scan reads byte j as bits 8j..8j+7");
+  const size_t n = list.size();
+  list.clear();
+  size_t i = 0;
+  for (; i + 8 <= pixels; i += 8) {
+    uint64_t word;
+    std::memcpy(&word, touched_ + i, 8);
+    while (word) {  // each byte is 0 or 1: bit 8 j set <=> pixel i + j touched (little-endian)
+      list.push_back(uint32_t(i + size_t(std::countr_zero(word)) / 8));
+      word &= word - 1;
+    }
+  }
+  for (; i < pixels; ++i)
+    if (touched_[i]) list.push_back(uint32_t(i));
+  if (list.size() != n) throw std::logic_error("SparseSplatter: touched bytes and the touched list disagree");
+}
+
 void SparseSplatter::clearScratch() {
   for (uint32_t i : *list_) {
     dense_[i] = RGBd{};
@@ -68,6 +103,7 @@ void SparseSplatter::clearScratch() {
 }
 
 SparseSplatter::~SparseSplatter() {
+  nQueued_ = 0;    // an abandoned unit's deferred splats were never added: nothing of theirs to clear
   clearScratch();  // zero for the next unit even if this one was abandoned (an exception in the chain)
   scratch_->inUse = false;
   if (owned_) delete scratch_;
@@ -80,7 +116,8 @@ SparseSplats SparseSplatter::take() {
   out.nonFinite = nonFinite_;
   SparseSplats::Layer& l = out.layers.emplace_back();
   l.layer = layer_;
-  std::sort(list_->begin(), list_->end());
+  flush();
+  sortedList();
   l.index = *list_;
   l.value.resize(l.index.size());
   for (size_t j = 0; j < l.index.size(); ++j) l.value[j] = dense_[l.index[j]];

@@ -49,7 +49,11 @@ class SparseSplatter {
   int width() const { return width_; }
   int height() const { return height_; }
 
-  // As Film::addSplat into this layer.
+  // As Film::addSplat into this layer. The add itself is deferred by kDelay splats (first in, first out,
+  // so every pixel still receives its splats in the same order: the same bits): a chain's splat lands on a
+  // pixel the scratch layer (24 bytes a pixel, 1.5 MiB at 256x256) rarely holds in cache after a large
+  // step, and the load missed on ~70% of this function's time. Prefetched now, the pixel is in cache
+  // kDelay splats (about as many mutations) later, when it is added.
   void addSplat(Vec2 pRaster, const Color& v) {
     if (!v.isFinite()) {
       ++nonFinite_;
@@ -57,25 +61,42 @@ class SparseSplatter {
     }
     const long i = filmPixelIndex(pRaster, width_, height_);
     if (i < 0) return;
-    if (!touched_[size_t(i)]) {
-      touched_[size_t(i)] = 1;
-      list_->push_back(uint32_t(i));
-    }
-    dense_[size_t(i)].add(v);
+    __builtin_prefetch(&dense_[size_t(i)], 1);
+    __builtin_prefetch(reinterpret_cast<const char*>(&dense_[size_t(i)]) + sizeof(RGBd) - 1, 1);
+    __builtin_prefetch(&touched_[size_t(i)], 1);
+    Pending& slot = pending_[nQueued_ % kDelay];
+    if (nQueued_ >= kDelay) apply(slot.pixel, slot.v);
+    slot = {uint32_t(i), v};
+    ++nQueued_;
   }
   // Adds v to pixel `pixel` (< width * height) as it stands: exact doubles, no finiteness rule (the b
-  // strata of develop.h (D6): a count and sums of a bounded value).
+  // strata of develop.h (D6): a count and sums of a bounded value). After the deferred splats.
   void addAt(size_t pixel, const RGBd& v) {
-    if (!touched_[pixel]) {
-      touched_[pixel] = 1;
-      list_->push_back(uint32_t(pixel));
-    }
+    flush();
+    touch(pixel);
     dense_[pixel] += v;
   }
   // The splats so far (one layer, pixels ascending); the scratch is zero again and the splatter empty.
   SparseSplats take();
 
  private:
+  static constexpr uint64_t kDelay = 8;  // a power of two
+  struct Pending {
+    uint32_t pixel;
+    Color v;
+  };
+  void touch(size_t pixel) {
+    if (!touched_[pixel]) {
+      touched_[pixel] = 1;
+      list_->push_back(uint32_t(pixel));
+    }
+  }
+  void apply(uint32_t pixel, const Color& v) {
+    touch(pixel);
+    dense_[pixel].add(v);
+  }
+  void flush();         // applies the deferred splats, oldest first
+  void sortedList();    // the list in ascending order
   void clearScratch();  // the listed pixels back to zero, the list empty
   int width_, height_;
   uint32_t layer_;
@@ -86,6 +107,8 @@ class SparseSplatter {
   RGBd* dense_;
   uint8_t* touched_;
   std::vector<uint32_t>* list_;
+  Pending pending_[kDelay];
+  uint64_t nQueued_ = 0;  // splats queued since the last flush; the last min(nQueued_, kDelay) are pending
 };
 
 }  // namespace mlt
