@@ -156,8 +156,7 @@ void KelemenSource::write(int stream, int index, float value) {
 // The common cases without a call (no registers to save), exactly as readImpl() treats them: a coordinate
 // already current; in a small step, one that was current in the previous iteration (one step); in a
 // large step, any coordinate read before (a fresh uniform).
-float KelemenSource::next1D() {
-  const int stream = stream_, index = next_++;
+[[gnu::always_inline]] inline float KelemenSource::readFast(int stream, int index) {
   std::vector<Coord>& v = coords_[stream];
   if (static_cast<size_t>(index) < v.size()) [[likely]] {
     Coord& c = v[index];
@@ -179,6 +178,13 @@ float KelemenSource::next1D() {
   return readSlow(stream, index);
 }
 [[gnu::noinline]] float KelemenSource::readSlow(int stream, int index) { return readImpl(stream, index); }
+float KelemenSource::next1D() { return readFast(stream_, next_++); }
+Vec2 KelemenSource::next2D() {
+  const int index = next_;
+  next_ += 2;
+  const float a = readFast(stream_, index);
+  return {a, readFast(stream_, index + 1)};
+}
 
 // Kelemen et al. 2002, sec. 6, Mutate(): dv = s2 * exp(-log(s2/s1) * U), random sign, wrap.
 // One 32-bit draw: bit 31 is the sign, the low 24 bits are U (table index + interpolation weight).

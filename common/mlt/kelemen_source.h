@@ -69,6 +69,7 @@ class KelemenSource final : public SampleSource {
   void startStream(Stream s) override { stream_ = static_cast<int>(s); next_ = 0; }
   void seek(int index) override { next_ = index; }
   float next1D() override;  // = read(stream_, next_++), with read's body inlined
+  Vec2 next2D() override;   // the same two reads in one call (most of a path's reads come in pairs)
 
   // Current value of a coordinate (applies pending mutations, exactly like next1D()).
   float read(int stream, int index);
@@ -100,6 +101,7 @@ class KelemenSource final : public SampleSource {
   struct Touched { int stream, index; };
 
   float readImpl(int stream, int index);
+  float readFast(int stream, int index);
   float readSlow(int stream, int index);
   Coord& grow(int stream, int index);
   float firstRead(int stream, int index);

@@ -48,7 +48,8 @@ class SampleSource {
   // Jump to coordinate `index` of the current stream (used to read a vertex's fixed block).
   virtual void seek(int index) = 0;
   virtual float next1D() = 0;
-  Vec2 next2D() {
+  // Two consecutive coordinates, in order (a source may override it to save the second call).
+  virtual Vec2 next2D() {
     const float a = next1D();
     return {a, next1D()};
   }
@@ -103,6 +104,11 @@ class IndependentSource final : public SampleSource {
   float next1D() override {
     ++reads_;
     return valueAt(stream_, next_++);
+  }
+  Vec2 next2D() override {
+    reads_ += 2;
+    const float a = valueAt(stream_, next_++);
+    return {a, valueAt(stream_, next_++)};
   }
   // Numbers drawn by next1D so far: a deterministic measure of the work of the path that drew them.
   uint32_t reads() const { return reads_; }
