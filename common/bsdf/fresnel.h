@@ -18,7 +18,7 @@ inline float fresnelDielectric(float cosThetaI, float eta, float* cosThetaT = nu
   }
   // etaRel = n_t / n_i for the side the light arrives from.
   const float etaRel = cosThetaI > 0 ? eta : 1 / eta;
-  const float sin2I = std::fmax(0.0f, 1 - cosThetaI * cosThetaI);
+  const float sin2I = fmaxNum(0.0f, 1 - cosThetaI * cosThetaI);
   const float cos2T = 1 - sin2I / (etaRel * etaRel);
   if (cos2T <= 0) {
     if (cosThetaT) *cosThetaT = 0;
@@ -36,8 +36,8 @@ inline float fresnelDielectric(float cosThetaI, float eta, float* cosThetaT = nu
 inline float fresnelConductor1(float cosThetaI, float eta, float k) {
   const float c2 = cosThetaI * cosThetaI, s2 = 1 - c2, s4 = s2 * s2;
   const float t1 = eta * eta - k * k - s2;
-  const float a2pb2 = std::sqrt(std::fmax(0.0f, t1 * t1 + 4 * k * k * eta * eta));
-  const float a = std::sqrt(std::fmax(0.0f, 0.5f * (a2pb2 + t1)));
+  const float a2pb2 = std::sqrt(fmaxNum(0.0f, t1 * t1 + 4 * k * k * eta * eta));
+  const float a = std::sqrt(fmaxNum(0.0f, 0.5f * (a2pb2 + t1)));
   const float term1 = a2pb2 + c2, term2 = 2 * a * cosThetaI;
   const float rs = (term1 - term2) / (term1 + term2);
   const float term3 = a2pb2 * c2 + s4, term4 = term2 * s2;

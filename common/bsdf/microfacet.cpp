@@ -78,9 +78,9 @@ Vec3 Microfacet::sampleGGX(const Vec3& v, Vec2 u) const {
   const float p1 = r * std::cos(phi);
   float p2 = r * std::sin(phi);
   const float s = 0.5f * (1 + vh.z);
-  p2 = (1 - s) * std::sqrt(std::fmax(0.0f, 1 - p1 * p1)) + s * p2;
-  const Vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::fmax(0.0f, 1 - p1 * p1 - p2 * p2)) * vh;
-  return normalize(Vec3(alpha_ * nh.x, alpha_ * nh.y, std::fmax(1e-7f, nh.z)));
+  p2 = (1 - s) * std::sqrt(fmaxNum(0.0f, 1 - p1 * p1)) + s * p2;
+  const Vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(fmaxNum(0.0f, 1 - p1 * p1 - p2 * p2)) * vh;
+  return normalize(Vec3(alpha_ * nh.x, alpha_ * nh.y, fmaxNum(1e-7f, nh.z)));
 }
 
 // Visible-normal sampling for Beckmann (Heitz & d'Eon 2014, sec. 4 and appendix; inversion as in

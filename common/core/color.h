@@ -2,6 +2,8 @@
 #pragma once
 #include <cmath>
 
+#include "common/core/vec.h"
+
 namespace mlt {
 
 struct Color {
@@ -16,7 +18,7 @@ struct Color {
   Color& operator*=(float s) { r *= s; g *= s; b *= s; return *this; }
   bool isBlack() const { return r == 0 && g == 0 && b == 0; }
   bool isFinite() const { return std::isfinite(r) && std::isfinite(g) && std::isfinite(b); }
-  float maxComponent() const { return std::fmax(r, std::fmax(g, b)); }
+  float maxComponent() const { return fmaxNum(r, fmaxNum(g, b)); }
   float average() const { return (r + g + b) * (1.0f / 3.0f); }
 };
 inline constexpr Color operator+(const Color& a, const Color& b) { return {a.r + b.r, a.g + b.g, a.b + b.b}; }

@@ -25,14 +25,14 @@ inline Vec2 sampleConcentricDisk(Vec2 u) {
 // Cosine-weighted hemisphere around +z (Malley's method). pdfW = cos(theta) / pi.
 inline Vec3 sampleCosineHemisphere(Vec2 u) {
   const Vec2 d = sampleConcentricDisk(u);
-  const float z = std::sqrt(std::fmax(0.0f, 1 - d.x * d.x - d.y * d.y));
+  const float z = std::sqrt(fmaxNum(0.0f, 1 - d.x * d.x - d.y * d.y));
   return {d.x, d.y, z};
 }
 inline float cosineHemispherePdfW(float cosTheta) { return cosTheta > 0 ? cosTheta * kInvPi : 0.0f; }
 
 inline Vec3 sampleUniformSphere(Vec2 u) {
   const float z = 1 - 2 * u.x;
-  const float r = std::sqrt(std::fmax(0.0f, 1 - z * z));
+  const float r = std::sqrt(fmaxNum(0.0f, 1 - z * z));
   const float phi = 2 * kPi * u.y;
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
@@ -40,7 +40,7 @@ inline constexpr float uniformSpherePdfW() { return kInv4Pi; }
 
 inline Vec3 sampleUniformHemisphere(Vec2 u) {
   const float z = u.x;
-  const float r = std::sqrt(std::fmax(0.0f, 1 - z * z));
+  const float r = std::sqrt(fmaxNum(0.0f, 1 - z * z));
   const float phi = 2 * kPi * u.y;
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
@@ -49,7 +49,7 @@ inline constexpr float uniformHemispherePdfW() { return kInv2Pi; }
 // Uniform in the cone of directions within acos(cosThetaMax) of +z. pdfW = 1 / (2 pi (1 - cosThetaMax)).
 inline Vec3 sampleUniformCone(Vec2 u, float cosThetaMax) {
   const float cosTheta = (1 - u.x) + u.x * cosThetaMax;
-  const float sinTheta = std::sqrt(std::fmax(0.0f, 1 - cosTheta * cosTheta));
+  const float sinTheta = std::sqrt(fmaxNum(0.0f, 1 - cosTheta * cosTheta));
   const float phi = u.y * 2 * kPi;
   return {std::cos(phi) * sinTheta, std::sin(phi) * sinTheta, cosTheta};
 }

@@ -262,7 +262,7 @@ std::optional<LightLeSample> AreaLight::sampleLe(Vec2 uPos, Vec2 uDir) const {
   s.L = Le(ps.uv);
   s.ray.o = ps.p;  // the exact point on the light; tMin skips the emitter's own surface
   s.ray.d = normalize(Frame(ps.ng).toWorld(local));
-  s.ray.tMin = 1e-4f * std::fmax(1.0f, std::fmax(std::fabs(ps.p.x), std::fmax(std::fabs(ps.p.y), std::fabs(ps.p.z))));
+  s.ray.tMin = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(ps.p.x), fmaxNum(std::fabs(ps.p.y), std::fabs(ps.p.z))));
   s.nLight = ps.ng;
   s.uv = ps.uv;
   s.pdfPos = 1.0f / area_;

@@ -29,7 +29,7 @@ struct SurfaceHit {
 // Offset a ray origin off a surface along the geometric normal to avoid self-intersection; `w` is the
 // direction the new ray will travel.
 inline Vec3 offsetRayOrigin(const Vec3& p, const Vec3& ng, const Vec3& w) {
-  const float scale = 1e-4f * std::fmax(1.0f, std::fmax(std::fabs(p.x), std::fmax(std::fabs(p.y), std::fabs(p.z))));
+  const float scale = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(p.x), fmaxNum(std::fabs(p.y), std::fabs(p.z))));
   return p + (dot(w, ng) > 0 ? ng : -ng) * scale;
 }
 

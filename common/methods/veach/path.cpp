@@ -281,8 +281,8 @@ std::optional<PathVertex> PathSpace::trace(const Vec3& from, const Vec3& fromNg,
   r.o = from;
   r.d = dir;
   if (fromNg.x != 0 || fromNg.y != 0 || fromNg.z != 0) {
-    const float scale = std::fmax(1.0f, std::fmax(std::fabs(from.x), std::fmax(std::fabs(from.y), std::fabs(from.z))));
-    r.tMin = 1e-4f * scale / std::fmax(absDot(fromNg, dir), 0.05f);
+    const float scale = fmaxNum(1.0f, fmaxNum(std::fabs(from.x), fmaxNum(std::fabs(from.y), std::fabs(from.z))));
+    r.tMin = 1e-4f * scale / fmaxNum(absDot(fromNg, dir), 0.05f);
   }
   const std::optional<SurfaceHit> hit = scene_.intersect(r);
   if (!hit) return std::nullopt;
