@@ -42,6 +42,42 @@ MeshDesc box() {
   return m;
 }
 
+// Geometric normals are computed once per triangle at build: after an empty mesh (an unused id) the next
+// mesh's hits still carry their own triangle's normal, the cross product of its edges normalized, for
+// triangles of every orientation.
+TEST(Accel, FaceNormalsBelongToTheHitTriangleAfterAnEmptyMesh) {
+  MeshDesc empty;
+  empty.name = "empty";
+  MeshDesc tilted;
+  tilted.name = "tilted";
+  Pcg32 rng(5, 9);
+  for (int f = 0; f < 16; ++f) {  // small random triangles around points of a sphere of radius 3
+    const Vec3 c = sampleUniformSphere({rng.uniform(), rng.uniform()}) * 3.0f;
+    for (int k = 0; k < 3; ++k)
+      tilted.positions.push_back(c + Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f) * 0.4f);
+    tilted.indices.insert(tilted.indices.end(), {uint32_t(3 * f), uint32_t(3 * f + 1), uint32_t(3 * f + 2)});
+  }
+  Accel accel({empty, quad(-10.0f), tilted});
+  int hits = 0;
+  for (int f = 0; f < 16; ++f) {
+    const Vec3 p0 = tilted.positions[3 * f], p1 = tilted.positions[3 * f + 1], p2 = tilted.positions[3 * f + 2];
+    Ray r;
+    r.o = {0, 0, 0};
+    r.d = normalize((p0 + p1 + p2) / 3.0f);  // the triangle's centroid, from the centre
+    const std::optional<SurfaceHit> h = accel.intersect(r);
+    ASSERT_TRUE(h) << "triangle " << f;
+    ASSERT_EQ(h->meshId, 2u);
+    const uint32_t g = h->primId;  // maybe another triangle in front of this one: check the one hit
+    const Vec3 a = tilted.positions[3 * g], b = tilted.positions[3 * g + 1], c = tilted.positions[3 * g + 2];
+    const Vec3 want = normalize(cross(b - a, c - a));
+    EXPECT_EQ(h->ng.x, want.x) << "triangle " << g;
+    EXPECT_EQ(h->ng.y, want.y) << "triangle " << g;
+    EXPECT_EQ(h->ng.z, want.z) << "triangle " << g;
+    hits += g == uint32_t(f);
+  }
+  EXPECT_GE(hits, 8);
+}
+
 TEST(Accel, HitOnQuadIsExact) {
   Accel accel({quad(2.0f)});
   Ray r;

@@ -1,7 +1,7 @@
 // The one file that talks to Embree 3: one device, one scene, one triangle geometry per mesh
 // (geomID = mesh index), robust traversal, high build quality. Hits are completed from our own copy of
-// the mesh data: ng from the triangle's positions (counter-clockwise = front), ns and uv interpolated
-// with Embree's barycentrics (p = (1-u-v) p0 + u p1 + v p2).
+// the mesh data: ng from the triangle's positions (counter-clockwise = front; computed once per triangle
+// at build), ns and uv interpolated with Embree's barycentrics (p = (1-u-v) p0 + u p1 + v p2).
 #include "common/render/accel.h"
 
 #include <embree3/rtcore.h>
@@ -16,6 +16,14 @@ struct Accel::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<MeshDesc> meshes;  // positions, normals, uvs, indices (names kept for messages)
+  // Per mesh and triangle: the unit geometric normal cross(p1 - p0, p2 - p0) / length, computed once with
+  // the same float operations a hit used to repeat (the same bits), or ok = false for a degenerate
+  // triangle (length 0), whose hit faces the ray instead.
+  struct FaceNormal {
+    Vec3 ng;
+    bool ok;
+  };
+  std::vector<std::vector<FaceNormal>> faceNormals;
   std::mutex errorMutex;
   std::string error;             // first device error reported by Embree's callback
 
@@ -79,6 +87,7 @@ Accel::Accel(const std::vector<MeshDesc>& meshes) : impl_(std::make_unique<Impl>
   rtcSetSceneBuildQuality(I.scene, RTC_BUILD_QUALITY_HIGH);
   I.check("scene creation");
 
+  I.faceNormals.resize(I.meshes.size());
   for (size_t m = 0; m < I.meshes.size(); ++m) {
     const MeshDesc& mesh = I.meshes[m];
     if (mesh.indices.size() % 3 != 0)
@@ -110,6 +119,15 @@ Accel::Accel(const std::vector<MeshDesc>& meshes) : impl_(std::make_unique<Impl>
       v[3 * i + 2] = mesh.positions[i].z;
     }
     for (size_t i = 0; i < mesh.indices.size(); ++i) idx[i] = mesh.indices[i];
+    std::vector<Impl::FaceNormal>& normals = I.faceNormals[m];
+    normals.resize(mesh.indices.size() / 3);
+    for (size_t f = 0; f < normals.size(); ++f) {
+      const uint32_t* tri = &mesh.indices[3 * f];
+      const Vec3& p0 = mesh.positions[tri[0]];
+      const Vec3 c = cross(mesh.positions[tri[1]] - p0, mesh.positions[tri[2]] - p0);
+      const float len = length(c);
+      normals[f] = len > 0 ? Impl::FaceNormal{c / len, true} : Impl::FaceNormal{Vec3(), false};
+    }
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(I.scene, geom, static_cast<unsigned>(m));
     rtcReleaseGeometry(geom);
@@ -137,9 +155,6 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
 
   const MeshDesc& mesh = impl_->meshes[rh.hit.geomID];
   const uint32_t* tri = &mesh.indices[3 * size_t(rh.hit.primID)];
-  const Vec3& p0 = mesh.positions[tri[0]];
-  const Vec3& p1 = mesh.positions[tri[1]];
-  const Vec3& p2 = mesh.positions[tri[2]];
   const float u = rh.hit.u, v = rh.hit.v, w = 1 - u - v;
 
   SurfaceHit h;
@@ -147,9 +162,8 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   h.p = ray.o + ray.d * h.t;
   h.meshId = rh.hit.geomID;
   h.primId = rh.hit.primID;
-  const Vec3 c = cross(p1 - p0, p2 - p0);
-  const float len = length(c);
-  h.ng = len > 0 ? c / len : normalize(-ray.d);  // degenerate triangle: face the ray
+  const Impl::FaceNormal& face = impl_->faceNormals[rh.hit.geomID][rh.hit.primID];
+  h.ng = face.ok ? face.ng : normalize(-ray.d);  // degenerate triangle: face the ray
   h.ns = h.ng;
   if (!mesh.normals.empty()) {
     const Vec3 n = mesh.normals[tri[0]] * w + mesh.normals[tri[1]] * u + mesh.normals[tri[2]] * v;
