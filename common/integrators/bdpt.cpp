@@ -304,8 +304,21 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
   TechniqueSample r;
   if (t < 1 || s < 0 || s + t < 2) return r;
   ws.reserve(t, std::max(s, 1));
-  const int nCamera = generateCameraSubpath(scene, source, pixel, t, -1, ws.camera.data(), &r.pRaster);
-  if (nCamera != t) return r;
+  if (t == 1) {
+    // Light tracing: connectBdpt samples the lens point toward the light subpath, and misWeight puts that
+    // vertex in camera[0]'s place, so a camera ray would go unused. Its numbers are still read, as
+    // generateCameraSubpath reads them (a chain's draws stay those of every technique), but no ray is
+    // made: ~40 ns of a Markov chain's light-tracing mutations.
+    const Camera& camera = scene.camera();
+    source.startStream(Stream::Camera);
+    const Vec2 u = source.next2D();
+    source.next2D();  // the lens numbers, read again by connectBdpt
+    r.pRaster = pixel ? *pixel + u : Vec2(u.x * float(camera.width()), u.y * float(camera.height()));
+    ws.camera[0] = Vertex();
+    ws.camera[0].type = VertexType::Camera;
+  } else if (generateCameraSubpath(scene, source, pixel, t, -1, ws.camera.data(), &r.pRaster) != t) {
+    return r;
+  }
   // s = 1 resamples its light vertex in connectBdpt: no light subpath to trace.
   if (s > 1 && generateLightSubpath(scene, source, s, -1, ws.light.data()) != s) return r;
   Vertex sampled;
