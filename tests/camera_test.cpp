@@ -104,6 +104,38 @@ TEST(Camera, GeneratedDirectionsMatchPdfDir) {
   }
 }
 
+// The densities generateRay returns with its ray (generateCameraSubpath's pdfFwd of the first vertex) are
+// pdfWe's for that ray, to float rounding, over the whole film and the lens; and never zero, where pdfWe
+// may round a ray from the film's very edge off the film (such a ray used to end its camera subpath).
+TEST(Camera, GeneratedRayCarriesPdfWesDensities) {
+  for (bool thinLens : {false, true}) {
+    CameraDesc d = lookingAlongZ(110, CameraDesc::FovAxis::X, 40, 30);
+    d.toWorld = Transform::lookAt({1, 2, 3}, {2, 2.3f, 3}, {0, 0, 1});
+    if (thinLens) {
+      d.type = CameraDesc::Type::ThinLens;
+      d.apertureRadius = 0.2f;
+      d.focusDistance = 2.5f;
+    }
+    const auto cam = makeCamera(d);
+    Pcg32 rng(3, 4);
+    for (int i = 0; i < 20000; ++i) {
+      Vec2 u = rng.uniform2();
+      if (i < 4) u = Vec2(i & 1 ? 0.999f : 0.0f, i & 2 ? 0.999f : 0.0f);  // the corners
+      const CameraRay c = cam->generateRay({u.x * 40, u.y * 30}, rng.uniform2());
+      float pdfPos = -1, pdfDir = -1;
+      cam->pdfWe(c.ray, &pdfPos, &pdfDir);
+      ASSERT_GT(c.pdfDir, 0) << "raster " << u.x * 40 << ", " << u.y * 30;
+      if (pdfDir == 0) {  // pdfWe's projection back onto the film may round a ray from its very edge off it
+        const float edge = std::fmin(std::fmin(u.x * 40, 40 - u.x * 40), std::fmin(u.y * 30, 30 - u.y * 30));
+        ASSERT_LT(edge, 0.05f) << "raster " << u.x * 40 << ", " << u.y * 30;
+        continue;
+      }
+      ASSERT_EQ(c.pdfPos, pdfPos);
+      ASSERT_NEAR(c.pdfDir / pdfDir, 1.0, 2e-6) << "raster " << u.x * 40 << ", " << u.y * 30;
+    }
+  }
+}
+
 // int_lens int_dirs We cos dw dA = 1 (the film-normalized importance of pbrt-v3), by Monte Carlo with
 // directions uniform in a cone that contains the frustum and, for the thin lens, uniform lens points.
 TEST(Camera, ImportanceIntegratesToOne) {

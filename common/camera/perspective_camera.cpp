@@ -49,7 +49,7 @@ class PerspectiveCamera final : public Camera {
 
   Vec3 o_, X_, Y_, Z_;  // camera position and orthonormal axes in world space (X = left)
   float tx_ = 1, ty_ = 1, A_ = 4;
-  float lensRadius_ = 0, lensArea_ = 1, focus_ = 1, nearClip_ = 0;
+  float lensRadius_ = 0, lensArea_ = 1, invLensArea_ = 1, focus_ = 1, nearClip_ = 0;
 };
 
 PerspectiveCamera::PerspectiveCamera(const CameraDesc& desc) {
@@ -95,6 +95,7 @@ PerspectiveCamera::PerspectiveCamera(const CameraDesc& desc) {
     if (!std::isfinite(desc.apertureRadius)) throw std::runtime_error("camera: thinlens aperture_radius is not finite");
     lensRadius_ = desc.apertureRadius;
     lensArea_ = kPi * lensRadius_ * lensRadius_;
+    invLensArea_ = 1 / lensArea_;
     focus_ = desc.focusDistance;
   } else if (desc.type == CameraDesc::Type::ThinLens && desc.apertureRadius < 0) {
     throw std::runtime_error("camera: thinlens aperture_radius must be >= 0");
@@ -124,6 +125,8 @@ CameraRay PerspectiveCamera::generateRay(Vec2 pRaster, Vec2 uLens) const {
   r.ray.d = normalize(toWorldDir(dCam));
   r.ray.tMin = nearClip_ / dCam.z;
   r.n = Z_;
+  r.pdfPos = invLensArea_;
+  r.pdfDir = 1 / (A_ * dCam.z * dCam.z * dCam.z);  // dCam.z = cos theta: as pdfWe
   return r;
 }
 
@@ -144,7 +147,7 @@ void PerspectiveCamera::pdfWe(const Ray& ray, float* pdfPos, float* pdfDir) cons
   const float cosTheta = dot(d, Z_);
   if (!(cosTheta > 0)) return;
   if (!project(toCameraPoint(ray.o + d * (focus_ / cosTheta)), nullptr)) return;
-  *pdfPos = 1 / lensArea_;
+  *pdfPos = invLensArea_;
   *pdfDir = 1 / (A_ * cosTheta * cosTheta * cosTheta);
 }
 

@@ -119,8 +119,7 @@ int generateCameraSubpath(const RenderScene& scene, SampleSource& source, const 
   const Vec2 uLens = source.next2D();
   *pRaster = pixel ? *pixel + u : Vec2(u.x * float(camera.width()), u.y * float(camera.height()));
   const CameraRay cr = camera.generateRay(*pRaster, uLens);
-  float pdfPos = 0, pdfDir = 0;
-  camera.pdfWe(cr.ray, &pdfPos, &pdfDir);
+  const float pdfPos = cr.pdfPos, pdfDir = cr.pdfDir;  // = camera.pdfWe(cr.ray) up to rounding
   Vertex& c = path[0];
   c = Vertex();
   c.type = VertexType::Camera;

@@ -17,6 +17,9 @@ namespace mlt {
 struct CameraRay {
   Ray ray;               // unit direction
   Vec3 n;                // camera forward axis (the "normal" of the lens)
+  // pdfWe(ray) as generateRay knows it (from the direction in camera space, no projection back onto the
+  // film): the same densities up to rounding, without a second pass over the ray. Both 0 if no ray.
+  float pdfPos = 0, pdfDir = 0;
 };
 
 struct CameraWiSample {  // BDPT t=1 / light tracing: connect a point to the lens
