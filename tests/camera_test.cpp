@@ -72,16 +72,22 @@ TEST(Camera, FovAxisSemantics) {
 
 // Directions of rays through uniform raster positions (at a fixed lens point) have solid-angle density
 // pdfDir = 1 / (A cos^3).
+// A 40x30 film with a 110-degree fov, looking along ~+x with z up; a thin lens (radius 0.2, focus 2.5) or
+// a pinhole.
+CameraDesc wideTiltedCamera(bool thinLens) {
+  CameraDesc d = lookingAlongZ(110, CameraDesc::FovAxis::X, 40, 30);
+  d.toWorld = Transform::lookAt({1, 2, 3}, {2, 2.3f, 3}, {0, 0, 1});
+  if (thinLens) {
+    d.type = CameraDesc::Type::ThinLens;
+    d.apertureRadius = 0.2f;
+    d.focusDistance = 2.5f;
+  }
+  return d;
+}
+
 TEST(Camera, GeneratedDirectionsMatchPdfDir) {
   for (bool thinLens : {false, true}) {
-    CameraDesc d = lookingAlongZ(110, CameraDesc::FovAxis::X, 40, 30);
-    d.toWorld = Transform::lookAt({1, 2, 3}, {2, 2.3f, 3}, {0, 0, 1});  // looking along ~+x, z up
-    if (thinLens) {
-      d.type = CameraDesc::Type::ThinLens;
-      d.apertureRadius = 0.2f;
-      d.focusDistance = 2.5f;
-    }
-    const auto cam = makeCamera(d);
+    const auto cam = makeCamera(wideTiltedCamera(thinLens));
     const Vec2 uLens(0.8f, 0.3f);
     const Vec3 o = cam->generateRay({1, 1}, uLens).ray.o;
     auto r = test::chi2TestSphere(
@@ -109,14 +115,7 @@ TEST(Camera, GeneratedDirectionsMatchPdfDir) {
 // may round a ray from the film's very edge off the film (such a ray used to end its camera subpath).
 TEST(Camera, GeneratedRayCarriesPdfWesDensities) {
   for (bool thinLens : {false, true}) {
-    CameraDesc d = lookingAlongZ(110, CameraDesc::FovAxis::X, 40, 30);
-    d.toWorld = Transform::lookAt({1, 2, 3}, {2, 2.3f, 3}, {0, 0, 1});
-    if (thinLens) {
-      d.type = CameraDesc::Type::ThinLens;
-      d.apertureRadius = 0.2f;
-      d.focusDistance = 2.5f;
-    }
-    const auto cam = makeCamera(d);
+    const auto cam = makeCamera(wideTiltedCamera(thinLens));
     Pcg32 rng(3, 4);
     for (int i = 0; i < 20000; ++i) {
       Vec2 u = rng.uniform2();
