@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <fmt/format.h>
 
 #include "common/farm/farm_types.h"
@@ -18,7 +19,7 @@ using Code = FarmError::Code;
   throw FarmError(Code::InvalidArgument, fmt::format("{}: {}", field, what));
 }
 
-void checkBuffer(const std::vector<RGBd>& values, const std::string& field, int width) {
+void checkBuffer(std::span<const RGBd> values, const std::string& field, int width) {
   static_assert(sizeof(RGBd) == 3 * sizeof(double));
   // Most of a task's film is zero (a chain visits a fraction of the pixels of each length); onQuantumGrid
   // reads each value's bits and settles a zero at its first test. Names the first pixel that fails.
@@ -42,7 +43,7 @@ void checkStrata(const PartialResult& r, int width, uint32_t maxLayer) {
     const size_t l = bStrataLayer(slot);
     if (!r.film.hasSplatLayer(l)) continue;
     const std::string field = fmt::format("partial.splat_layers[{}]", l);
-    const std::vector<RGBd>& layer = r.film.splatLayer(l);
+    const PixelBuffer& layer = r.film.splatLayer(l);
     double n = 0;  // whole numbers below 2^53: exact
     for (size_t i = 0; i < layer.size(); ++i) {
       const RGBd& v = layer[i];

@@ -5,9 +5,46 @@
 
 #include <cmath>
 #include <limits>
+#include <span>
+#include <utility>
 
 namespace mlt {
 namespace {
+
+// The film's buffers (pixel_buffer.h): zero at first whatever the allocator reused, independent copies,
+// moves that leave the source empty, and a layer allocated on first use reads zero where nothing wrote.
+TEST(PixelBuffer, StartsZeroCopiesAndMovesLikeAValue) {
+  for (int round = 0; round < 3; ++round) {  // later rounds may get memory the previous ones freed
+    PixelBuffer a(100000);
+    ASSERT_EQ(a.size(), 100000u);
+    for (const RGBd& v : a) ASSERT_TRUE(v.r == 0 && v.g == 0 && v.b == 0);
+    for (size_t i = 0; i < a.size(); i += 7) a[i] = RGBd{double(i), 1, -2};
+    PixelBuffer b = a;  // a copy: equal, then independent
+    ASSERT_EQ(b.size(), a.size());
+    EXPECT_EQ(b[7].r, 7.0);
+    b[7].r = 5;
+    EXPECT_EQ(a[7].r, 7.0);
+    b = b;  // self-assignment keeps the values
+    EXPECT_EQ(b[7].r, 5.0);
+    PixelBuffer c = std::move(b);
+    EXPECT_TRUE(b.empty());
+    EXPECT_EQ(b.data(), nullptr);
+    EXPECT_EQ(c[7].r, 5.0);
+    const std::span<const RGBd> view = c;
+    EXPECT_EQ(view.size(), c.size());
+    EXPECT_EQ(view.data(), c.data());
+  }
+  EXPECT_TRUE(PixelBuffer().empty());
+  EXPECT_TRUE(PixelBuffer(0).empty());
+  Film f(300, 200);
+  f.addSplat({10.5f, 20.5f}, Color(1, 2, 3), 9);
+  const PixelBuffer& layer = f.splatLayer(9);
+  for (size_t i = 0; i < layer.size(); ++i) {
+    const bool hit = i == size_t(20 * 300 + 10);
+    ASSERT_EQ(layer[i].r, hit ? 1.0 : 0.0) << i;
+    ASSERT_EQ(layer[i].b, hit ? 3.0 : 0.0) << i;
+  }
+}
 
 TEST(Film, BoxFilterBinsByFloorOfRasterPosition) {
   Film film(4, 3);

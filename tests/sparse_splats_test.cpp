@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "common/job/job_types.h"
@@ -18,7 +19,7 @@ namespace {
 
 constexpr int W = 37, H = 23;  // not a power of two: row-major indexing is exercised
 
-bool sameBuffer(const std::vector<RGBd>& a, const std::vector<RGBd>& b) {
+bool sameBuffer(std::span<const RGBd> a, std::span<const RGBd> b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(RGBd)) == 0;
 }
 
@@ -121,7 +122,7 @@ TEST(SparseSplats, UnitsOfEverySizeEqualTheDenseCallsInOrder) {
     std::uniform_real_distribution<float> u(0.f, 1.f);
     SparseSplatter splatter(W2, H2, 2);
     Film dense(W2, H2);
-    std::vector<RGBd>& layer = dense.splatLayer(2);
+    PixelBuffer& layer = dense.splatLayer(2);
     Vec2 last{0.5f, 0.5f};
     for (int i = 0; i < n; ++i) {
       const Vec2 p{u(rng) * W2, u(rng) * H2};
@@ -151,7 +152,9 @@ TEST(SparseSplats, UnitsOfEverySizeEqualTheDenseCallsInOrder) {
       const RGBd want = layer[pixel];
       const RGBd got = isListed ? l.value[listed] : RGBd{};
       ASSERT_EQ(std::memcmp(&want, &got, sizeof(RGBd)), 0) << n << " splats, pixel " << pixel;
-      if (!isListed) ASSERT_TRUE(want.r == 0 && want.g == 0 && want.b == 0) << n << " splats, pixel " << pixel;
+      if (!isListed) {
+        ASSERT_TRUE(want.r == 0 && want.g == 0 && want.b == 0) << n << " splats, pixel " << pixel;
+      }
       listed += isListed;
     }
     EXPECT_EQ(listed, l.index.size());

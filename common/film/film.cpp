@@ -11,14 +11,14 @@ Film::Film(int width, int height) : width_(width), height_(height) {
   if (width <= 0 || height <= 0)
     throw std::invalid_argument("Film: size must be positive, got " + std::to_string(width) + "x" +
                                 std::to_string(height));
-  pixelSum_.assign(pixelCount(), RGBd{});
+  pixelSum_ = PixelBuffer(pixelCount());
   pixelCount_.assign(pixelCount(), 0.0);
-  splat_[0].assign(pixelCount(), RGBd{});
+  splat_[0] = PixelBuffer(pixelCount());
 }
 
-std::vector<RGBd>& Film::splatLayer(size_t layer) {
+PixelBuffer& Film::splatLayer(size_t layer) {
   if (layer >= splat_.size()) splat_.resize(layer + 1);
-  if (splat_[layer].empty()) splat_[layer].assign(pixelCount(), RGBd{});
+  if (splat_[layer].empty()) splat_[layer] = PixelBuffer(pixelCount());
   return splat_[layer];
 }
 
@@ -29,7 +29,7 @@ std::vector<uint32_t> Film::splatLayers() const {
   return layers;
 }
 
-const std::vector<RGBd>& Film::splatLayer(size_t layer) const {
+const PixelBuffer& Film::splatLayer(size_t layer) const {
   if (!hasSplatLayer(layer)) throw std::out_of_range("Film: no splat layer " + std::to_string(layer));
   return splat_[layer];
 }
@@ -52,7 +52,7 @@ void Film::addSplat(Vec2 pRaster, const Color& v, size_t layer) {
   }
   const long i = filmPixelIndex(pRaster, width_, height_);
   if (i < 0) return;
-  std::vector<RGBd>& buffer = layer == 0 ? splat_[0] : splatLayer(layer);
+  PixelBuffer& buffer = layer == 0 ? splat_[0] : splatLayer(layer);
   buffer[i].add(v);
 }
 
@@ -67,8 +67,8 @@ void Film::merge(const Film& other) {
   }
   for (size_t l = 0; l < other.splat_.size(); ++l) {
     if (!other.hasSplatLayer(l)) continue;
-    std::vector<RGBd>& mine = splatLayer(l);
-    const std::vector<RGBd>& theirs = other.splat_[l];
+    PixelBuffer& mine = splatLayer(l);
+    const PixelBuffer& theirs = other.splat_[l];
     for (size_t i = 0; i < mine.size(); ++i) mine[i] += theirs[i];
   }
   nonFinite_ += other.nonFinite_;

@@ -25,6 +25,7 @@
 
 #include "common/core/color.h"
 #include "common/core/vec.h"
+#include "common/film/pixel_buffer.h"
 
 namespace mlt {
 
@@ -33,6 +34,8 @@ struct RGBd {
   void add(const Color& c) { r += c.r; g += c.g; b += c.b; }
   RGBd& operator+=(const RGBd& o) { r += o.r; g += o.g; b += o.b; return *this; }
 };
+// A film buffer: pages of pixels nothing writes stay unallocated (pixel_buffer.h).
+using PixelBuffer = ZeroedBuffer<RGBd>;
 
 // Index of the pixel containing pRaster (pixels) on a width x height film, row-major from the top-left,
 // or -1 when it lies off the film or is not a number.
@@ -71,24 +74,24 @@ class Film {
   size_t splatLayerCount() const { return splat_.size(); }
   bool hasSplatLayer(size_t layer) const { return layer < splat_.size() && !splat_[layer].empty(); }
   std::vector<uint32_t> splatLayers() const;  // the layers that hold a buffer, ascending (0 always first)
-  std::vector<RGBd>& splatLayer(size_t layer);  // allocates a zero layer if absent
-  const std::vector<RGBd>& splatLayer(size_t layer) const;  // throws std::out_of_range if absent
+  PixelBuffer& splatLayer(size_t layer);  // allocates a zero layer if absent
+  const PixelBuffer& splatLayer(size_t layer) const;  // throws std::out_of_range if absent
 
   // Raw access (for I/O and the wire).
-  std::vector<RGBd>& pixelSums() { return pixelSum_; }
+  PixelBuffer& pixelSums() { return pixelSum_; }
   std::vector<double>& pixelCounts() { return pixelCount_; }
-  std::vector<RGBd>& splatSums() { return splat_[0]; }
-  const std::vector<RGBd>& pixelSums() const { return pixelSum_; }
+  PixelBuffer& splatSums() { return splat_[0]; }
+  const PixelBuffer& pixelSums() const { return pixelSum_; }
   const std::vector<double>& pixelCounts() const { return pixelCount_; }
-  const std::vector<RGBd>& splatSums() const { return splat_[0]; }
+  const PixelBuffer& splatSums() const { return splat_[0]; }
   uint64_t nonFiniteSamples() const { return nonFinite_; }
   void setNonFiniteSamples(uint64_t n) { nonFinite_ = n; }
 
  private:
   int width_ = 0, height_ = 0;
-  std::vector<RGBd> pixelSum_;
+  PixelBuffer pixelSum_;
   std::vector<double> pixelCount_;
-  std::vector<std::vector<RGBd>> splat_ = std::vector<std::vector<RGBd>>(1);  // [0] allocated by the constructor
+  std::vector<PixelBuffer> splat_ = std::vector<PixelBuffer>(1);  // [0] allocated by the constructor
   uint64_t nonFinite_ = 0;
 };
 

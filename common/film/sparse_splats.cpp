@@ -17,7 +17,7 @@ void SparseSplats::addTo(Film& film) const {
                                 std::to_string(film.height()) + " vs " + std::to_string(width) + "x" +
                                 std::to_string(height));
   for (const Layer& l : layers) {
-    std::vector<RGBd>& buffer = film.splatLayer(l.layer);
+    PixelBuffer& buffer = film.splatLayer(l.layer);
     for (size_t j = 0; j < l.index.size(); ++j) buffer[l.index[j]] += l.value[j];
   }
   film.setNonFiniteSamples(film.nonFiniteSamples() + nonFinite);

@@ -55,7 +55,7 @@ uint64_t filmKeyBase(uint64_t jobSeed, uint64_t unitIndex) { return hashKeys(job
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
   const uint64_t base = filmKeyBase(jobSeed, unitIndex);
   // Zero entries (most of a chain's film) stay zero and cost no hashing.
-  auto quantizeBuffer = [base](std::vector<RGBd>& buffer, uint64_t which) {
+  auto quantizeBuffer = [base](PixelBuffer& buffer, uint64_t which) {
     for (size_t i = 0; i < buffer.size(); ++i) {
       RGBd& v = buffer[i];
       if (v.r == 0 && v.g == 0 && v.b == 0) continue;

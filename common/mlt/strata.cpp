@@ -36,7 +36,7 @@ void pool(Node& node) {
 
 class Quadtree {
  public:
-  Quadtree(const std::vector<RGBd>& layer, int width, int height) : layer_(layer), w_(width), h_(height) {}
+  Quadtree(std::span<const RGBd> layer, int width, int height) : layer_(layer), w_(width), h_(height) {}
 
   Node visit(int x0, int y0, int size) const {
     Node node;
@@ -75,13 +75,13 @@ class Quadtree {
   }
 
  private:
-  const std::vector<RGBd>& layer_;
+  std::span<const RGBd> layer_;
   int w_, h_;
 };
 
 }  // namespace
 
-StratifiedMean postStratifiedMean(const std::vector<RGBd>& layer, int width, int height) {
+StratifiedMean postStratifiedMean(std::span<const RGBd> layer, int width, int height) {
   if (width <= 0 || height <= 0 || layer.size() != size_t(width) * size_t(height))
     throw std::invalid_argument("postStratifiedMean: a layer of " + std::to_string(layer.size()) + " pixels for a " +
                                 std::to_string(width) + "x" + std::to_string(height) + " film");

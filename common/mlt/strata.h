@@ -19,6 +19,7 @@
 // the root pooled is the plain mean of every large step.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "common/film/film.h"
@@ -32,6 +33,6 @@ inline RGBd strataSample(double m) { return RGBd{1.0, m, m * m}; }
 size_t strataPixel(float ux, float uy, int width, int height);
 
 // (D6) over a layer of (n, sum m, sum m^2) per pixel (row-major, width x height).
-StratifiedMean postStratifiedMean(const std::vector<RGBd>& layer, int width, int height);
+StratifiedMean postStratifiedMean(std::span<const RGBd> layer, int width, int height);
 
 }  // namespace mlt
