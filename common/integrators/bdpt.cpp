@@ -95,6 +95,11 @@ int randomWalk(const RenderScene& scene, SampleSource& source, Ray ray, Color be
   return added;
 }
 
+// The raster position of Camera [0,1] = u: within `pixel` if one is given, else anywhere on the film.
+Vec2 filmPosition(const Camera& camera, const Vec2* pixel, Vec2 u) {
+  return pixel ? *pixel + u : Vec2(u.x * float(camera.width()), u.y * float(camera.height()));
+}
+
 // Geometry term with visibility, shading normals for the cosines (pbrt-v3's G).
 float G(const RenderScene& scene, const Vertex& v0, const Vertex& v1) {
   Vec3 d = v0.p - v1.p;
@@ -117,7 +122,7 @@ int generateCameraSubpath(const RenderScene& scene, SampleSource& source, const 
   source.startStream(Stream::Camera);
   const Vec2 u = source.next2D();
   const Vec2 uLens = source.next2D();
-  *pRaster = pixel ? *pixel + u : Vec2(u.x * float(camera.width()), u.y * float(camera.height()));
+  *pRaster = filmPosition(camera, pixel, u);
   const CameraRay cr = camera.generateRay(*pRaster, uLens);
   const float pdfPos = cr.pdfPos, pdfDir = cr.pdfDir;  // = camera.pdfWe(cr.ray) up to rounding
   Vertex& c = path[0];
@@ -312,7 +317,7 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
     source.startStream(Stream::Camera);
     const Vec2 u = source.next2D();
     source.next2D();  // the lens numbers, read again by connectBdpt
-    r.pRaster = pixel ? *pixel + u : Vec2(u.x * float(camera.width()), u.y * float(camera.height()));
+    r.pRaster = filmPosition(camera, pixel, u);
     ws.camera[0] = Vertex();
     ws.camera[0].type = VertexType::Camera;
   } else if (generateCameraSubpath(scene, source, pixel, t, -1, ws.camera.data(), &r.pRaster) != t) {
