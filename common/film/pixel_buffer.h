@@ -3,8 +3,12 @@
 // and a large-step layer per path length (mlt/develop.h); at 1920x1080 and depth 30 that is 60 layers of
 // 50 MB, most of whose pixels the long lengths never reach. As std::vector<RGBd>, every layer was zeroed
 // and faulted in whole: 2.6 GB resident and 65% of a one-mutation-per-pixel job (docs/PERFORMANCE.md).
+// Small buffers are not worth it: a 256x256 layer (1.5 MB) faulted in page by page as the chains write it
+// cost 4% of a depth-30 job against one memset (docs/PERFORMANCE.md), so below kCallocBytes the memory is
+// malloc'd and zeroed at once, as std::vector did.
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -57,10 +61,22 @@ class ZeroedBuffer {
   operator std::span<const T>() const { return {data_, size_}; }
 
  private:
+  static constexpr size_t kCallocBytes = size_t{4} << 20;
+
   static T* allocate(size_t n) {
     if (n == 0) return nullptr;
-    void* p = std::calloc(n, sizeof(T));
+    if (n > SIZE_MAX / sizeof(T)) throw std::bad_alloc();
+    const size_t bytes = n * sizeof(T);
+    if (bytes >= kCallocBytes) {
+      void* p = std::calloc(n, sizeof(T));
+      if (!p) throw std::bad_alloc();
+      return static_cast<T*>(p);
+    }
+    void* p = std::malloc(bytes);
     if (!p) throw std::bad_alloc();
+    // Without this barrier GCC folds malloc + memset into calloc, which is what this branch avoids.
+    asm volatile("" : : "r"(p) : "memory");
+    std::memset(p, 0, bytes);
     return static_cast<T*>(p);
   }
   T* data_ = nullptr;
