@@ -1,6 +1,7 @@
 // Zero-run film encoding (see sparse_film.h).
 #include "proto/sparse_film.h"
 
+#include <algorithm>
 #include <cstring>
 #include <fmt/format.h>
 
@@ -13,15 +14,18 @@ namespace {
 struct Segment {
   const uint64_t* data;
   size_t words;
+  const PixelBuffer* buffer = nullptr;  // its blocks (pixel_buffer.h); nullptr: the pixel counts
 };
 std::vector<Segment> segments(const Film& film) {
   const size_t n = film.pixelCount();
   std::vector<Segment> s;
-  s.push_back({reinterpret_cast<const uint64_t*>(film.pixelSums().data()), 3 * n});
+  auto add = [&](const PixelBuffer& b) { s.push_back({reinterpret_cast<const uint64_t*>(b.data()), 3 * n, &b}); };
+  add(film.pixelSums());
   s.push_back({reinterpret_cast<const uint64_t*>(film.pixelCounts().data()), n});
-  for (uint32_t l : film.splatLayers()) s.push_back({reinterpret_cast<const uint64_t*>(film.splatLayer(l).data()), 3 * n});
+  for (uint32_t l : film.splatLayers()) add(film.splatLayer(l));
   return s;
 }
+constexpr size_t kBlockWords = 3 * PixelBuffer::kBlock;
 
 void putVarint(std::string& out, uint64_t v) {
   while (v >= 0x80) {
@@ -66,7 +70,16 @@ std::string encodeFilmZeroRuns(const Film& film) {
   };
   while (!atEnd()) {
     uint64_t zeros = 0;
-    while (!atEnd() && segs[seg].data[i] == 0) {
+    while (!atEnd()) {
+      const Segment& g = segs[seg];
+      // A block nothing wrote is zero: counted without reading it (and faulting in its pages).
+      if (g.buffer && i % kBlockWords == 0 && !g.buffer->blockWritten(i / kBlockWords)) {
+        const size_t k = std::min(kBlockWords, g.words - i);
+        zeros += k;
+        i += k;
+        continue;
+      }
+      if (g.data[i] != 0) break;
       ++zeros;
       ++i;
     }
@@ -90,21 +103,31 @@ Film decodeFilmZeroRuns(int width, int height, const std::string& bytes, uint64_
                         const std::vector<uint32_t>& layers) {
   // A zero film checked as the dense decoder checks it, filled in place: the zero runs cost nothing.
   Film film = zeroFilm(width, height, nonFinite, layers);
-  std::vector<uint64_t*> bufs;
+  // The pixel-sum and splat buffers are written through writeRange, which marks the blocks the literal
+  // words reach (pixel_buffer.h): the blocks a zero run covers stay unmarked and are never read again.
+  std::vector<PixelBuffer*> pixelBufs;  // nullptr: the pixel counts (a plain vector)
   std::vector<size_t> sizes;
   const size_t n = film.pixelCount();
-  bufs.push_back(reinterpret_cast<uint64_t*>(film.pixelSums().data()));
+  pixelBufs.push_back(&film.pixelSums());
   sizes.push_back(3 * n);
-  bufs.push_back(reinterpret_cast<uint64_t*>(film.pixelCounts().data()));
+  pixelBufs.push_back(nullptr);
   sizes.push_back(n);
   for (uint32_t l : layers) {
-    bufs.push_back(reinterpret_cast<uint64_t*>(film.splatLayer(l).data()));
+    pixelBufs.push_back(&film.splatLayer(l));
     sizes.push_back(3 * n);
   }
+  // Words [i, i + k) of buffer seg, ready for writing.
+  auto target = [&](size_t seg, size_t i, size_t k) -> uint64_t* {
+    if (!pixelBufs[seg]) return reinterpret_cast<uint64_t*>(film.pixelCounts().data()) + i;
+    const size_t first = i / 3, last = (i + k - 1) / 3;
+    RGBd* p = pixelBufs[seg]->writeRange(first, last - first + 1);
+    return reinterpret_cast<uint64_t*>(p) + (i - 3 * first);
+  };
+  const size_t nBufs = sizes.size();
   size_t seg = 0, i = 0, pos = 0;
   auto skip = [&](uint64_t words) {
     while (words > 0) {
-      if (seg == bufs.size()) throw WireError("film_chunk", "zero-run stream longer than the film");
+      if (seg == nBufs) throw WireError("film_chunk", "zero-run stream longer than the film");
       const uint64_t k = std::min<uint64_t>(words, sizes[seg] - i);
       i += k;
       words -= k;
@@ -119,16 +142,16 @@ Film decodeFilmZeroRuns(int width, int height, const std::string& bytes, uint64_
     uint64_t literal = getVarint(bytes, pos);
     if (literal > (bytes.size() - pos) / 8) throw WireError("film_chunk", "zero-run stream ends inside literal words");
     while (literal > 0) {
-      if (seg == bufs.size()) throw WireError("film_chunk", "zero-run stream longer than the film");
+      if (seg == nBufs) throw WireError("film_chunk", "zero-run stream longer than the film");
       const uint64_t k = std::min<uint64_t>(literal, sizes[seg] - i);
-      std::memcpy(bufs[seg] + i, bytes.data() + pos, k * 8);
+      std::memcpy(target(seg, i, k), bytes.data() + pos, k * 8);
       pos += k * 8;
       literal -= k;
       skip(k);
     }
   }
-  if (seg != bufs.size())
-    throw WireError("film_chunk", fmt::format("zero-run stream covers {} buffers of {}", seg, bufs.size()));
+  if (seg != nBufs)
+    throw WireError("film_chunk", fmt::format("zero-run stream covers {} buffers of {}", seg, nBufs));
   return film;
 }
 

@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <vector>
 
 #include "common/core/rng.h"
 
@@ -125,6 +126,28 @@ TEST(Exr, PartialFilmKeepsEverySplatLayerBitExactly) {
     EXPECT_EQ(std::memcmp(back.film.splatLayer(l).data(), film.splatLayer(l).data(), film.pixelCount() * sizeof(RGBd)), 0)
         << "layer " << l;
   }
+  const std::vector<Color> a = film.develop(scales), b = back.film.develop(scales);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
+}
+
+// Reading writes only the non-zero values, through writeBlock: the blocks the file holds nothing in stay
+// unmarked (pixel_buffer.h) and develop reads the same image from fewer pages.
+TEST(Exr, PartialFilmReadMarksOnlyTheBlocksItFills) {
+  Film film(1000, 8);  // 8000 pixels: pixel i is in block i / kBlock
+  film.addSplat({10.5f, 0.5f}, Color(1, 2, 3), 5);   // pixel 10
+  film.addSplat({500.5f, 2.5f}, Color(0, 0, 4), 5);  // pixel 2500
+  film.addSample({999.5f, 7.5f}, Color(1, 1, 1));    // the last pixel's sums, 7999
+  const std::string path = tempPath("blocks.exr");
+  const std::vector<double> scales = {1, 0, 0, 0, 0, 0.25};
+  writeFilmExr(path, film, {}, film.develop(scales));
+  const FilmExr back = readFilmExr(path);
+  std::vector<size_t> l5, l0, pixels;
+  back.film.splatLayer(5).forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { l5.push_back(b); });
+  back.film.splatLayer(0).forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { l0.push_back(b); });
+  back.film.pixelSums().forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { pixels.push_back(b); });
+  EXPECT_EQ(l5, (std::vector<size_t>{10 / PixelBuffer::kBlock, 2500 / PixelBuffer::kBlock}));
+  EXPECT_TRUE(l0.empty());
+  EXPECT_EQ(pixels, (std::vector<size_t>{7999 / PixelBuffer::kBlock}));
   const std::vector<Color> a = film.develop(scales), b = back.film.develop(scales);
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
 }

@@ -61,6 +61,33 @@ TEST(FarmLayer, ZeroRunFilmsRoundTripBitExactly) {
   }
 }
 
+// The decoder writes the literal words through writeRange: the blocks only zero runs cover stay unmarked
+// (pixel_buffer.h), so the coordinator's merge and develop never read them.
+TEST(FarmLayer, ZeroRunDecodeMarksOnlyTheBlocksItFills) {
+  Film f(1000, 8);  // 8000 pixels: pixel i is in block i / kBlock
+  f.addSplat({10.5f, 0.5f}, Color(1, 2, 3), 3);   // pixel 10
+  f.addSplat({500.5f, 2.5f}, Color(0, 0, 4), 3);  // pixel 2500
+  f.addSplat({999.5f, 7.5f}, Color(5, 0, 0), 0);  // the last pixel, 7999
+  // The encoder counts unwritten blocks as zeros without reading them: the same stream as with every
+  // block marked (data() marks them all).
+  Film marked = f;
+  marked.pixelSums().data();
+  for (uint32_t l : marked.splatLayers()) marked.splatLayer(l).data();
+  EXPECT_EQ(wire::encodeFilmZeroRuns(marked), wire::encodeFilmZeroRuns(f));
+  const Film g = wire::decodeFilmZeroRuns(1000, 8, wire::encodeFilmZeroRuns(f), 0, f.splatLayers());
+  EXPECT_TRUE(sameBits(f, g));
+  std::vector<size_t> l3, l0, pixels;
+  g.splatLayer(3).forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { l3.push_back(b); });
+  g.splatLayer(0).forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { l0.push_back(b); });
+  g.pixelSums().forEachWrittenBlock([&](size_t b, const RGBd*, size_t) { pixels.push_back(b); });
+  EXPECT_EQ(l3, (std::vector<size_t>{10 / PixelBuffer::kBlock, 2500 / PixelBuffer::kBlock}));
+  EXPECT_EQ(l0, (std::vector<size_t>{7999 / PixelBuffer::kBlock}));
+  EXPECT_TRUE(pixels.empty());
+  const std::vector<double> scales = {0.5, 0, 0, 2};
+  const std::vector<Color> a = f.develop(scales), b = g.develop(scales);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0);
+}
+
 TEST(FarmLayer, MalformedZeroRunStreamsAreRefused) {
   const Film f = randomFilm(8, 8, 0.5, 3);
   const std::string good = wire::encodeFilmZeroRuns(f);

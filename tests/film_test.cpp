@@ -1,12 +1,16 @@
 // Film: box filter bins, non-finite samples counted and dropped, merge = element-wise sum, develop scale.
 #include "common/film/film.h"
 
+#include "common/core/rng.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <span>
 #include <utility>
+#include <vector>
 
 namespace mlt {
 namespace {
@@ -45,6 +49,94 @@ TEST(PixelBuffer, StartsZeroCopiesAndMovesLikeAValue) {
     const bool hit = i == size_t(20 * 300 + 10);
     ASSERT_EQ(layer[i].r, hit ? 1.0 : 0.0) << i;
     ASSERT_EQ(layer[i].b, hit ? 3.0 : 0.0) << i;
+  }
+}
+
+// Written blocks (pixel_buffer.h): a block no mutable access reached reads zero and is reported unwritten;
+// operator[] marks its own block, data() every block, const access none; copies keep the marks.
+TEST(PixelBuffer, MarksTheBlocksMutableAccessReaches) {
+  for (const size_t n : {size_t(2000), size_t(300000)}) {  // malloc + memset, and calloc (>= 4 MB)
+    constexpr size_t B = PixelBuffer::kBlock;
+    PixelBuffer a(n);
+    ASSERT_EQ(a.blockCount(), (n + B - 1) / B);
+    EXPECT_EQ(a.blockSize(a.blockCount() - 1), n - (a.blockCount() - 1) * B);
+    for (size_t b = 0; b < a.blockCount(); ++b) ASSERT_FALSE(a.blockWritten(b));
+    a[B + 3].r = 2;  // block 1
+    const PixelBuffer& ca = a;
+    EXPECT_EQ(ca[5 * B].r, 0.0);  // a const read marks nothing
+    a.writeBlock(3)[7].g = 5;     // block 3
+    a.writeRange(6 * B - 1, 2);   // blocks 5 and 6, values untouched
+    std::vector<size_t> marked;
+    a.forEachWrittenBlock([&](size_t b, const RGBd* v, size_t count) {
+      marked.push_back(b);
+      EXPECT_EQ(v, ca.block(b));
+      EXPECT_EQ(count, a.blockSize(b));
+    });
+    EXPECT_EQ(marked, (std::vector<size_t>{1, 3, 5, 6}));
+    EXPECT_EQ(ca[B + 3].r, 2.0);
+    EXPECT_EQ(ca[3 * B + 7].g, 5.0);
+    EXPECT_EQ(ca[6 * B - 1].r, 0.0);
+    PixelBuffer c = a;  // the copy has the values and the marks
+    EXPECT_EQ(c.blockWritten(1) + c.blockWritten(2) + c.blockWritten(3), 2);
+    EXPECT_EQ(static_cast<const PixelBuffer&>(c)[3 * B + 7].g, 5.0);
+    c.data();  // raw mutable access: anything may be written
+    for (size_t b = 0; b < c.blockCount(); ++b) ASSERT_TRUE(c.blockWritten(b));
+  }
+}
+
+// develop and merge read only the written blocks; they must give what reading every value gives, bit for
+// bit, on films with many layers of which each holds a few scattered splats (the mmlt job film's shape).
+TEST(Film, DevelopAndMergeOfSparseLayersEqualTheDenseFormula) {
+  for (const int w : {40, 600}) {  // 1600 pixels (small buffers), 600 x 400 (calloc'd, 5.8 MB per layer)
+    const int h = w == 40 ? 40 : 400;
+    Film a(w, h), b(w, h);
+    Pcg32 rng(11, uint64_t(w));
+    for (int i = 0; i < 3000; ++i) {
+      Film& f = i % 3 == 0 ? b : a;
+      const Vec2 p(rng.uniform() * w * (i % 5 == 0 ? 0.1f : 1.f), rng.uniform() * h);
+      if (i % 7 == 0) f.addSample(p, Color(rng.uniform(), 1, 2));
+      else f.addSplat(p, Color(rng.uniform(), rng.uniform(), 0.5f), size_t(1 + 2 * (i % 13)));
+    }
+    // The dense formula: every pixel, every layer.
+    auto dense = [](const Film& f, const std::vector<double>& scales) {
+      std::vector<Color> out(f.pixelCount());
+      for (size_t i = 0; i < out.size(); ++i) {
+        double r = 0, g = 0, bl = 0;
+        if (f.pixelCounts()[i] > 0) {
+          const double inv = 1.0 / f.pixelCounts()[i];
+          r = f.pixelSums()[i].r * inv, g = f.pixelSums()[i].g * inv, bl = f.pixelSums()[i].b * inv;
+        }
+        for (size_t l = 0; l < f.splatLayerCount(); ++l) {
+          if (!f.hasSplatLayer(l)) continue;
+          const RGBd& v = f.splatLayer(l)[i];
+          r += scales[l] * v.r, g += scales[l] * v.g, bl += scales[l] * v.b;
+        }
+        out[i] = Color(float(r), float(g), float(bl));
+      }
+      return out;
+    };
+    std::vector<double> scales(a.splatLayerCount() + 1);
+    for (size_t l = 0; l < scales.size(); ++l) scales[l] = 0.37 * double(l + 1);
+    Film before = a;
+    a.merge(b);
+    const Film& ca = a;
+    const Film& cb = b;
+    const Film& c0 = before;
+    for (size_t l = 0; l < ca.splatLayerCount(); ++l) {  // merge = element-wise sum
+      if (!ca.hasSplatLayer(l)) continue;
+      for (size_t i = 0; i < ca.pixelCount(); ++i) {
+        const double want = (c0.hasSplatLayer(l) ? c0.splatLayer(l)[i].r : 0.0) +
+                            (cb.hasSplatLayer(l) ? cb.splatLayer(l)[i].r : 0.0);
+        ASSERT_EQ(ca.splatLayer(l)[i].r, want) << "w " << w << " layer " << l << " pixel " << i;
+      }
+    }
+    const std::vector<Color> got = ca.develop(scales), want = dense(ca, scales);
+    ASSERT_EQ(got.size(), want.size());
+    EXPECT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(Color)), 0) << "w " << w;
+    // Scattered splats leave blocks unwritten, which is what the sparse reads skip.
+    size_t unwritten = 0;
+    for (size_t bk = 0; bk < ca.splatLayer(25).blockCount(); ++bk) unwritten += !ca.splatLayer(25).blockWritten(bk);
+    if (w == 600) EXPECT_GT(unwritten, 0u);
   }
 }
 

@@ -2,6 +2,7 @@
 #include "common/film/film.h"
 
 #include <cmath>
+#include <utility>
 #include <stdexcept>
 #include <string>
 
@@ -61,15 +62,19 @@ void Film::merge(const Film& other) {
     throw std::invalid_argument("Film::merge: size mismatch " + std::to_string(width_) + "x" +
                                 std::to_string(height_) + " vs " + std::to_string(other.width_) + "x" +
                                 std::to_string(other.height_));
-  for (size_t i = 0; i < pixelSum_.size(); ++i) {
-    pixelSum_[i] += other.pixelSum_[i];
-    pixelCount_[i] += other.pixelCount_[i];
-  }
+  // Only the blocks the other film wrote: the rest of it is zero (pixel_buffer.h).
+  for (size_t i = 0; i < pixelSum_.size(); ++i) pixelCount_[i] += other.pixelCount_[i];
+  other.pixelSum_.forEachWrittenBlock([&](size_t b, const RGBd* theirs, size_t n) {
+    RGBd* mine = pixelSum_.writeBlock(b);
+    for (size_t i = 0; i < n; ++i) mine[i] += theirs[i];
+  });
   for (size_t l = 0; l < other.splat_.size(); ++l) {
     if (!other.hasSplatLayer(l)) continue;
-    PixelBuffer& mine = splatLayer(l);
-    const PixelBuffer& theirs = other.splat_[l];
-    for (size_t i = 0; i < mine.size(); ++i) mine[i] += theirs[i];
+    PixelBuffer& layer = splatLayer(l);
+    other.splat_[l].forEachWrittenBlock([&](size_t b, const RGBd* theirs, size_t n) {
+      RGBd* mine = layer.writeBlock(b);
+      for (size_t i = 0; i < n; ++i) mine[i] += theirs[i];
+    });
   }
   nonFinite_ += other.nonFinite_;
 }
@@ -78,23 +83,32 @@ std::vector<Color> Film::develop(const std::vector<double>& layerScales) const {
   for (size_t l = layerScales.size(); l < splat_.size(); ++l)
     if (hasSplatLayer(l)) throw std::invalid_argument("Film::develop: splat layer " + std::to_string(l) + " has no scale");
   std::vector<Color> out(pixelCount());
-  for (size_t i = 0; i < out.size(); ++i) {
-    double r = 0, g = 0, b = 0;
-    if (pixelCount_[i] > 0) {
-      const double inv = 1.0 / pixelCount_[i];
-      r = pixelSum_[i].r * inv;
-      g = pixelSum_[i].g * inv;
-      b = pixelSum_[i].b * inv;
+  // Block by block, reading only the layers that wrote the block (pixel_buffer.h): a layer's zeros add
+  // nothing, and reading them would fault in pages nothing wrote (60 layers of 50 MB at 1920x1080).
+  std::vector<std::pair<const RGBd*, double>> here;  // the block's written layers, in index order
+  for (size_t b = 0; b < pixelSum_.blockCount(); ++b) {
+    here.clear();
+    for (size_t l = 0; l < splat_.size(); ++l)
+      if (!splat_[l].empty() && splat_[l].blockWritten(b)) here.emplace_back(splat_[l].block(b), layerScales[l]);
+    const bool pixels = pixelSum_.blockWritten(b);
+    const size_t i0 = b * PixelBuffer::kBlock, n = pixelSum_.blockSize(b);
+    for (size_t j = 0; j < n; ++j) {
+      const size_t i = i0 + j;
+      double r = 0, g = 0, bl = 0;
+      if (pixels && pixelCount_[i] > 0) {
+        const double inv = 1.0 / pixelCount_[i];
+        r = pixelSum_[i].r * inv;
+        g = pixelSum_[i].g * inv;
+        bl = pixelSum_[i].b * inv;
+      }
+      // Layers in index order, so that the same sums develop to the same floats everywhere.
+      for (const auto& [values, scale] : here) {
+        r += scale * values[j].r;
+        g += scale * values[j].g;
+        bl += scale * values[j].b;
+      }
+      out[i] = Color(static_cast<float>(r), static_cast<float>(g), static_cast<float>(bl));
     }
-    // Layers in index order, so that the same sums develop to the same floats everywhere.
-    for (size_t l = 0; l < splat_.size(); ++l) {
-      if (splat_[l].empty()) continue;
-      const double scale = layerScales[l];
-      r += scale * splat_[l][i].r;
-      g += scale * splat_[l][i].g;
-      b += scale * splat_[l][i].b;
-    }
-    out[i] = Color(static_cast<float>(r), static_cast<float>(g), static_cast<float>(b));
   }
   return out;
 }

@@ -402,10 +402,20 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
 
     FilmExr out{Film(s.width, s.height), readMetadata(header, false), checksum != nullptr};
     for (size_t f = 0; f < fields.size(); ++f) {
-      double* data = fieldData(out.film, fields[f]);
+      if (fields[f].layer == -1) {  // the pixel counts, a plain vector
+        double* data = fieldData(out.film, fields[f]);
+        for (size_t i = 0; i < n; ++i)
+          data[i] = std::bit_cast<double>((uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i]);
+        continue;
+      }
+      // The film is zero already: only the non-zero words are written, through writeBlock, so the blocks
+      // the file holds no value in stay unmarked and are never read again (pixel_buffer.h).
+      PixelBuffer& buffer = fields[f].layer == -2 ? out.film.pixelSums() : out.film.splatLayer(size_t(fields[f].layer));
       for (size_t i = 0; i < n; ++i) {
         const uint64_t bits = (uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i];
-        data[i * fields[f].stride + fields[f].offset] = std::bit_cast<double>(bits);
+        if (bits == 0) continue;
+        RGBd& v = buffer.writeBlock(i >> PixelBuffer::kBlockShift)[i & (PixelBuffer::kBlock - 1)];
+        reinterpret_cast<double*>(&v)[fields[f].offset] = std::bit_cast<double>(bits);
       }
     }
     out.film.setNonFiniteSamples(uint64_t(nf));

@@ -55,11 +55,16 @@ uint64_t filmKeyBase(uint64_t jobSeed, uint64_t unitIndex) { return hashKeys(job
 void quantizeFilm(Film& film, uint64_t jobSeed, uint64_t unitIndex) {
   const uint64_t base = filmKeyBase(jobSeed, unitIndex);
   // Zero entries (most of a chain's film) stay zero and cost no hashing.
+  // Blocks nothing wrote are zero (pixel_buffer.h): not even read.
   auto quantizeBuffer = [base](PixelBuffer& buffer, uint64_t which) {
-    for (size_t i = 0; i < buffer.size(); ++i) {
-      RGBd& v = buffer[i];
-      if (v.r == 0 && v.g == 0 && v.b == 0) continue;
-      quantizeValue(v, base, i, which);
+    for (size_t b = 0; b < buffer.blockCount(); ++b) {
+      if (!buffer.blockWritten(b)) continue;
+      RGBd* values = buffer.writeBlock(b);
+      for (size_t j = 0; j < buffer.blockSize(b); ++j) {
+        RGBd& v = values[j];
+        if (v.r == 0 && v.g == 0 && v.b == 0) continue;
+        quantizeValue(v, base, b * PixelBuffer::kBlock + j, which);
+      }
     }
   };
   quantizeBuffer(film.splatSums(), splatBufferKey(0));
