@@ -312,7 +312,7 @@ def main():
     if a.header:
         with open(a.header) as f:
             lines += f.read().rstrip("\n").split("\n") + [""]
-    scenes = list(OrderedDict.fromkeys(r["scene"] for r in runs))
+    scenes = sorted({r["scene"] for r in runs})  # alphabetical, whatever order the directories came in
     all_groups = OrderedDict()
     body = []
     for scene in scenes:
