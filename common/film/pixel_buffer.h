@@ -11,8 +11,11 @@
 // access marks what it can reach (operator[] its value's block, data(), begin() and the span conversion
 // all of them), so a block not marked is all zero, by construction. Readers that only need the non-zero
 // values (Film::develop, merge, the partial-film codecs) skip the rest and never read, hence never fault
-// in, pages nothing wrote. One writer at a time, as for any film buffer.
+// in, pages nothing wrote. Threads may write disjoint values through operator[] at the same time (a
+// sample job's tiles do): its mark is a relaxed atomic store, a plain byte store on x86. writeBlock and
+// writeRange, whose first write zeroes the block, are for one writer at a time.
 #pragma once
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -66,7 +69,7 @@ class ZeroedBuffer {
 
   // Mutable access marks the blocks it can reach; const access marks nothing.
   T& operator[](size_t i) {
-    written_[i >> kBlockShift] = 1;
+    std::atomic_ref<uint8_t>(written_[i >> kBlockShift]).store(1, std::memory_order_relaxed);
     return data_[i];
   }
   const T& operator[](size_t i) const { return data_[i]; }
