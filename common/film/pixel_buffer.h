@@ -116,7 +116,9 @@ class ZeroedBuffer {
  private:
   static constexpr size_t kCallocBytes = size_t{4} << 20;
 
-  void markAll() { std::memset(written_.data(), 1, written_.size()); }
+  void markAll() {
+    if (!written_.empty()) std::memset(written_.data(), 1, written_.size());  // no memset on a null pointer
+  }
 
   static T* allocate(size_t n) {
     if (n == 0) return nullptr;
