@@ -99,6 +99,9 @@ class ZeroedBuffer {
     }
     return p;
   }
+  // Value i for writing, its block marked (and zeroed on its first write) as writeBlock does: for one
+  // writer at a time that reads the value before it writes (`+=`), unlike operator[].
+  T& writeAt(size_t i) { return writeBlock(i >> kBlockShift)[i & (kBlock - 1)]; }
   // Values [first, first + count) for writing (a raw copy into them, e.g. a decoder), their blocks marked
   // as writeBlock marks them, before the caller writes.
   T* writeRange(size_t first, size_t count) {

@@ -18,10 +18,10 @@ void SparseSplats::addTo(Film& film) const {
                                 std::to_string(height));
   for (const Layer& l : layers) {
     PixelBuffer& buffer = film.splatLayer(l.layer);
-    // writeBlock: a block's first write faults its pages in once (pixel_buffer.h).
+    // writeAt: a block's first write faults its pages in once (pixel_buffer.h).
     for (size_t j = 0; j < l.index.size(); ++j) {
       const uint32_t i = l.index[j];
-      buffer.writeBlock(i >> PixelBuffer::kBlockShift)[i & (PixelBuffer::kBlock - 1)] += l.value[j];
+      buffer.writeAt(i) += l.value[j];
     }
   }
   film.setNonFiniteSamples(film.nonFiniteSamples() + nonFinite);

@@ -270,13 +270,8 @@ std::vector<uint32_t> layersInHeader(const std::string& path, const Imf::Header&
   return layers;
 }
 
-double* fieldData(Film& film, const DoubleField& f) {
-  static_assert(sizeof(RGBd) == 3 * sizeof(double));
-  if (f.layer == -2) return reinterpret_cast<double*>(film.pixelSums().data());
-  if (f.layer == -1) return film.pixelCounts().data();
-  return reinterpret_cast<double*>(film.splatLayer(size_t(f.layer)).data());
-}
 const double* fieldData(const Film& film, const DoubleField& f) {
+  static_assert(sizeof(RGBd) == 3 * sizeof(double));
   if (f.layer == -2) return reinterpret_cast<const double*>(film.pixelSums().data());
   if (f.layer == -1) return film.pixelCounts().data();
   return reinterpret_cast<const double*>(film.splatLayer(size_t(f.layer)).data());
@@ -403,7 +398,7 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
     FilmExr out{Film(s.width, s.height), readMetadata(header, false), checksum != nullptr};
     for (size_t f = 0; f < fields.size(); ++f) {
       if (fields[f].layer == -1) {  // the pixel counts, a plain vector
-        double* data = fieldData(out.film, fields[f]);
+        double* data = out.film.pixelCounts().data();
         for (size_t i = 0; i < n; ++i)
           data[i] = std::bit_cast<double>((uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i]);
         continue;
@@ -414,7 +409,7 @@ FilmExr readFilmExr(const std::string& path, const std::function<void(const Film
       for (size_t i = 0; i < n; ++i) {
         const uint64_t bits = (uint64_t(words[2 * f][i]) << 32) | words[2 * f + 1][i];
         if (bits == 0) continue;
-        RGBd& v = buffer.writeBlock(i >> PixelBuffer::kBlockShift)[i & (PixelBuffer::kBlock - 1)];
+        RGBd& v = buffer.writeAt(i);
         reinterpret_cast<double*>(&v)[fields[f].offset] = std::bit_cast<double>(bits);
       }
     }
