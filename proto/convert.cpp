@@ -257,7 +257,7 @@ v1::JobPlan toProto(const JobPlan& plan) {
   n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
   if (plan.norm.directShare >= 0) {
     n->set_direct_share(plan.norm.directShare);
-    n->set_direct_cv(plan.norm.directCv);
+    if (plan.norm.directCv >= 0) n->set_direct_cv(plan.norm.directCv);  // absent: the share alone decided
   }
   for (const BootstrapEstimate& e : plan.norm.bootstrapB) {
     auto* p = n->add_bootstrap_b();
@@ -302,10 +302,10 @@ JobPlan fromProto(const v1::JobPlan& p) {
   if (n.has_direct_share()) {
     if (!(n.direct_share() >= 0 && n.direct_share() <= 1))
       throw WireError("plan.norm.direct_share", fmt::format("invalid value {}", n.direct_share()));
-    if (!(n.direct_cv() >= 0 && std::isfinite(n.direct_cv())))
+    if (n.has_direct_cv() && !(n.direct_cv() >= 0 && std::isfinite(n.direct_cv())))
       throw WireError("plan.norm.direct_cv", fmt::format("invalid value {}", n.direct_cv()));
     plan.norm.directShare = n.direct_share();
-    plan.norm.directCv = n.direct_cv();
+    plan.norm.directCv = n.has_direct_cv() ? n.direct_cv() : -1;
   }
   for (const auto& e : n.bootstrap_b()) {
     for (double v : {e.b(), e.std_err(), e.sample_var(), e.bulk_b(), e.bulk_std_err(), e.bulk_var(), e.excess_mean_sq()})

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 #include <vector>
+#include <utility>
 
 #include "common/core/color.h"
 #include "common/integrators/evaluators.h"
@@ -50,6 +51,49 @@ TEST(DirectLightRule, PilotIsAPureFunctionOfItsInputs) {
   RenderSettings other = s;
   other.seed = 8;
   EXPECT_NE(directLightPilot(*scene, other).cv, one.cv);  // its own numbers, from the job's seed
+}
+
+// The pilot draws only what can change its choice: caustic-mirror (every light behind a mirror, no direct
+// light) stops after the share's first samples; door-ajar (light through a gap, ~15% direct) draws the
+// share's samples but not the CV's; a pilot that only sizes a pass draws every share sample and no CV; the
+// share is the same number whichever use drew it.
+TEST(DirectLightRule, DrawsOnlyWhatCanChangeTheChoice) {
+  const auto bundled = [](const std::string& file) {
+    SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + file);
+    desc.camera.width = desc.camera.height = 128;
+    return std::make_pair(RenderScene::build(desc), pilotSettings(128, 128, desc.maxDepth.value_or(5), 1));
+  };
+  const auto [caustic, cs] = bundled("caustic-mirror.xml");
+  const DirectLightPilot dark = directLightPilot(*caustic, cs);
+  EXPECT_LT(dark.share, kPilotShareStop);
+  EXPECT_EQ(dark.cv, -1.0);
+  EXPECT_EQ(dark.samples, kPilotShareFirst);
+  EXPECT_TRUE(dark.decided);
+  EXPECT_FALSE(dark.separate);
+
+  const auto [door, ds] = bundled("door-ajar.xml");
+  const DirectLightPilot gap = directLightPilot(*door, ds);
+  EXPECT_GE(gap.share, kPilotShareStop);
+  EXPECT_LT(gap.share, kDirectMinShare);
+  EXPECT_EQ(gap.cv, -1.0);
+  EXPECT_EQ(gap.samples, kPilotShareSamples);
+  EXPECT_FALSE(gap.separate);
+  const DirectLightPilot gapSize = directLightPilot(*door, ds, PilotUse::SizePass);
+  EXPECT_EQ(std::memcmp(&gap.share, &gapSize.share, sizeof(double)), 0);
+
+  const std::unique_ptr<RenderScene> box = RenderScene::build(test::smallCornellBox(48, 32));
+  const RenderSettings s = pilotSettings(48, 32, 5, 7);
+  const DirectLightPilot decide = directLightPilot(*box, s);
+  const DirectLightPilot size = directLightPilot(*box, s, PilotUse::SizePass);
+  EXPECT_GE(decide.share, kDirectMinShare);  // a box lit from above: the CV decides
+  EXPECT_GE(decide.cv, 0.0);
+  EXPECT_EQ(decide.samples, kPilotShareSamples + kPilotCvSamples);
+  EXPECT_EQ(std::memcmp(&decide.share, &size.share, sizeof(double)), 0);
+  EXPECT_EQ(size.cv, -1.0);
+  EXPECT_EQ(size.samples, kPilotShareSamples);
+  EXPECT_FALSE(size.decided);
+  // A pilot that sizes a pass draws every share sample even where the first ones put the share near 0.
+  EXPECT_EQ(directLightPilot(*caustic, cs, PilotUse::SizePass).samples, kPilotShareSamples);
 }
 
 // The share the pilot measures is the direct light's share of the image: bdpt limited to two segments

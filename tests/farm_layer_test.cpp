@@ -231,5 +231,30 @@ TEST(FarmLayer, TasksAreBoundedByTheirFilmTraffic) {
   EXPECT_EQ(splitTasks(chainPlan(1920, 1080, 3, 10)).size(), 3u);
 }
 
+// The direct-light pilot's numbers travel with the plan: a share with its CV, and a share whose CV the
+// pilot never drew (a share below the rule's threshold decides alone, direct_light_rule.h) stays
+// unmeasured, as -1, instead of failing the plan's check (a farm job on caustic-mirror or door-ajar did);
+// a CV on the wire that is negative or not finite is still refused.
+TEST(FarmLayer, ThePilotsShareAndAnUnmeasuredCvTravelWithThePlan) {
+  JobPlan plan = chainPlan(8, 8, 4, 16);
+  plan.settings.mutationsPerPixel = 1;
+  for (const double cv : {0.52, -1.0}) {
+    plan.norm.directShare = 0.14;
+    plan.norm.directCv = cv;
+    const JobPlan back = wire::parseJobPlan(wire::jobPlanBytes(plan));
+    EXPECT_EQ(back.norm.directShare, 0.14);
+    EXPECT_EQ(back.norm.directCv, cv);
+  }
+  plan.norm.directShare = -1;  // no pilot: neither number is sent
+  EXPECT_FALSE(wire::toProto(plan).norm().has_direct_share());
+  EXPECT_FALSE(wire::toProto(plan).norm().has_direct_cv());
+  for (const double bad : {-1.0, std::numeric_limits<double>::infinity()}) {
+    v1::JobPlan p = wire::toProto(plan);
+    p.mutable_norm()->set_direct_share(0.5);
+    p.mutable_norm()->set_direct_cv(bad);
+    EXPECT_THROW(wire::fromProto(p), std::exception) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace mlt::farm

@@ -27,17 +27,17 @@ struct ByLength {
   double seen = 0, oneBounce = 0, longer = 0;
 };
 
-// `count` bdpt samples of the pilot's stream `tag` at max depth `maxDepth`; sample i lies in tile
-// g = i mod strata^2 of a strata x strata grid over the film, at a uniform position in it.
+// Samples [first, first + count) of the pilot's stream `tag`, bdpt at max depth `maxDepth`; sample i lies
+// in tile g = i mod strata^2 of a strata x strata grid over the film, at a uniform position in it.
 std::vector<ByLength> pilotSamples(const RenderScene& scene, const RenderSettings& settings, int maxDepth,
-                                   uint64_t count, int strata, uint64_t tag) {
+                                   uint64_t first, uint64_t count, int strata, uint64_t tag) {
   IntegratorSettings integrator = settings.integrator;
   integrator.maxDepth = maxDepth;
   const std::unique_ptr<PathEvaluator> bdpt = makeEvaluator(scene, "bdpt", integrator);
   const int W = settings.width, H = settings.height, tiles = strata * strata;
   const uint64_t seed = hashKeys(settings.seed, kPilotStreamTag, tag);
   std::vector<ByLength> out(count);
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 64), [&](const tbb::blocked_range<uint64_t>& range) {
+  tbb::parallel_for(tbb::blocked_range<uint64_t>(first, first + count, 64), [&](const tbb::blocked_range<uint64_t>& range) {
     PathContribution path;
     for (uint64_t i = range.begin(); i != range.end(); ++i) {
       const int g = int(i % uint64_t(tiles)), gx = g % strata, gy = g / strata;
@@ -49,7 +49,7 @@ std::vector<ByLength> pilotSamples(const RenderScene& scene, const RenderSetting
       IndependentSource source(seed, i);
       path.clear();
       bdpt->evaluate(source, &pixel, path);
-      ByLength& o = out[i];
+      ByLength& o = out[i - first];
       for (const Splat& sp : path.splats) {
         if (!sp.L.isFinite()) continue;
         const int length = sp.s + sp.t - 1;
@@ -62,21 +62,35 @@ std::vector<ByLength> pilotSamples(const RenderScene& scene, const RenderSetting
 
 }  // namespace
 
-DirectLightPilot directLightPilot(const RenderScene& scene, const RenderSettings& settings) {
+DirectLightPilot directLightPilot(const RenderScene& scene, const RenderSettings& settings, PilotUse use) {
   const auto start = std::chrono::steady_clock::now();
+  const auto done = [&](DirectLightPilot& out) {
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  };
   DirectLightPilot out;
-  out.samples = kPilotShareSamples + kPilotCvSamples;
+  out.decided = use == PilotUse::Decide;
 
-  // The share, from samples of every length.
+  // The share, from samples of every length: kPilotShareFirst of them, then (unless they already put it
+  // far below the threshold) the rest of kPilotShareSamples. Summed in index order, so the share is the
+  // same number whether or not the first ones could have stopped it.
   double direct = 0, all = 0;
-  for (const ByLength& x : pilotSamples(scene, settings, settings.integrator.maxDepth, kPilotShareSamples, 1, 1)) {
-    direct += x.seen + x.oneBounce;
-    all += x.seen + x.oneBounce + x.longer;
-  }
-  out.share = all > 0 ? direct / all : 0;
+  const auto addShare = [&](uint64_t first, uint64_t count) {
+    for (const ByLength& x : pilotSamples(scene, settings, settings.integrator.maxDepth, first, count, 1, 1)) {
+      direct += x.seen + x.oneBounce;
+      all += x.seen + x.oneBounce + x.longer;
+    }
+    out.samples = first + count;
+    out.share = all > 0 ? direct / all : 0;
+  };
+  addShare(0, kPilotShareFirst);
+  if (use == PilotUse::Decide && out.share < kPilotShareStop) return done(out);
+  addShare(kPilotShareFirst, kPilotShareSamples - kPilotShareFirst);
+  // The CV only where it can change the choice.
+  if (use == PilotUse::SizePass || out.share < kDirectMinShare) return done(out);
 
   // The CV of one-bounce light within strata, from samples limited to kDirectMaxSegments segments.
-  const std::vector<ByLength> d = pilotSamples(scene, settings, kDirectMaxSegments, kPilotCvSamples, kPilotStrata, 2);
+  const std::vector<ByLength> d = pilotSamples(scene, settings, kDirectMaxSegments, 0, kPilotCvSamples, kPilotStrata, 2);
   const int tiles = kPilotStrata * kPilotStrata;
   std::vector<double> sum(tiles, 0.0), sumSq(tiles, 0.0), count(tiles, 0.0);
   double total = 0;
@@ -92,10 +106,10 @@ DirectLightPilot directLightPilot(const RenderScene& scene, const RenderSettings
   for (int g = 0; g < tiles; ++g)
     if (count[g] > 0) within += std::max(0.0, sumSq[g] - sum[g] * sum[g] / count[g]);
   const double n = double(kPilotCvSamples), mean = total / n;
+  out.samples += kPilotCvSamples;
   out.cv = mean > 0 ? std::sqrt(within / n) / mean : 0;
-  out.separate = out.share >= kDirectMinShare && out.cv <= kDirectMaxCv;
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return out;
+  out.separate = out.cv <= kDirectMaxCv;  // the share is at least kDirectMinShare here
+  return done(out);
 }
 
 }  // namespace mlt

@@ -45,7 +45,8 @@ struct Normalization {
   uint64_t bootstrapSamples = 0;
   double bootstrapSeconds = 0;
   // The direct-light pilot of a job whose settings left the choice to the plan (DirectLight::Auto,
-  // common/job/direct_light_rule.h): its share and CV; -1 where no pilot ran.
+  // common/job/direct_light_rule.h): its share and CV; -1 where no pilot ran (the CV also where the share
+  // alone decided).
   double directShare = -1, directCv = -1;
   // The b a chain of `slot` weights Kelemen MIS splats with, and its large-step layer is developed with
   // (mlt/develop.h (D7)): the bootstrap's b_k (mmlt, rjmlt) or b.

@@ -216,12 +216,14 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
   // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.
   RenderSettings resolved = settings;
-  const auto runPilot = [&]() {
-    if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings)) {
+  // (A pilot run only to size a pass measured no CV: it cannot stand in for one that must choose.)
+  const auto runPilot = [&](PilotUse use) {
+    if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings) &&
+        (earlier->pilot->decided || use == PilotUse::SizePass)) {
       out.pilot = earlier->pilot;
       out.pilot->seconds = 0;  // not run again
     } else {
-      out.pilot = directLightPilot(scene, settings);
+      out.pilot = directLightPilot(scene, settings, use);
     }
     return *out.pilot;
   };
@@ -232,19 +234,21 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     if (!spec.allowsSeparateDirect()) {
       resolved = withDirectLightChoice(settings, DirectLight::Chains);
     } else {
-      const DirectLightPilot p = runPilot();
+      const DirectLightPilot p = runPilot(PilotUse::Decide);
       resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
-                   "segments, their one-bounce light a CV of {:.2f} per sample (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
+                   "segments, {} (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
                    spec.name(), p.separate ? fmt::format("by a {} pass (--direct-light separate)", kDirectPassMethod)
                               : std::string("in the chains (--direct-light chains)"),
-                   p.samples, 100 * p.share, kDirectMaxSegments, p.cv, 100 * kDirectMinShare, kDirectMaxCv,
-                   pilotCost(p));
+                   p.samples, 100 * p.share, kDirectMaxSegments,
+                   p.cv >= 0 ? fmt::format("their one-bounce light a CV of {:.2f} per sample", p.cv)
+                             : std::string("too little for a pass (its CV not measured)"),
+                   100 * kDirectMinShare, kDirectMaxCv, pilotCost(p));
     }
   } else if (separatesDirect(settings) && settings.spp == 0) {
     // The pass asked for, its size left to the plan: sized by the pilot's share like a chosen one (the plan
     // logs the share and the size).
-    const DirectLightPilot p = runPilot();
+    const DirectLightPilot p = runPilot(PilotUse::SizePass);
     spdlog::info("{}: the {} pass (--direct-light separate) is sized by a pilot of {} bdpt samples ({})", spec.name(),
                  kDirectPassMethod, p.samples, pilotCost(p));
   }

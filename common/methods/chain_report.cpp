@@ -144,7 +144,7 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   if (separatesDirect(s)) m.numbers["directSpp"] = s.spp;  // the pass's samples per pixel
   if (r.directShare >= 0) {  // the plan chose it (--direct-light auto): what the pilot measured
     m.numbers["directLightShare"] = r.directShare;
-    m.numbers["directLightCv"] = r.directCv;
+    if (r.directCv >= 0) m.numbers["directLightCv"] = r.directCv;  // not measured below the share's threshold
   }
   m.strings["kernel"] = s.kernel == MutationKernel::Gaussian ? "gaussian" : "kelemen";
   if (s.kernel == MutationKernel::Gaussian) {
@@ -185,7 +185,7 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
   if (m.numbers.count("directLightShare")) {
     r.directShare = number(m, "directLightShare");
-    r.directCv = number(m, "directLightCv");
+    if (m.numbers.count("directLightCv")) r.directCv = number(m, "directLightCv");
   }
   r.bSamples = uint64_t(number(m, "bSamples"));
   r.settings.bootstrapSamples = int(number(m, "bootstrapPerLength"));
@@ -264,9 +264,10 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
     out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
   }
   if (separatesDirect(r.settings) || r.directShare >= 0) {
-    const std::string pilot = r.directShare >= 0 ? fmt::format("the pilot's choice: {:.1f}% of the light, CV {:.2f}",
-                                                               100 * r.directShare, r.directCv)
-                                                 : std::string("as asked");
+    const std::string pilot =
+        r.directShare < 0 ? std::string("as asked")
+        : r.directCv >= 0 ? fmt::format("the pilot's choice: {:.1f}% of the light, CV {:.2f}", 100 * r.directShare, r.directCv)
+                          : fmt::format("the pilot's choice: {:.1f}% of the light, CV not measured", 100 * r.directShare);
     out += separatesDirect(r.settings)
                ? fmt::format("direct light (paths of at most {} segments): a {} pass of {} samples per pixel ({})\n",
                              kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "common/job/direct_light_rule.h"
 #include "common/render/render_scene.h"
 #include "common/scene/scene_loader.h"
@@ -18,7 +20,7 @@ int main(int argc, char** argv) {
   const std::vector<std::string> scenes = {"cornell-box.xml",    "checker-spheres.pbrt", "textured-serialized.xml",
                                            "cornell-spheres.xml", "caustic-mirror.xml",  "door-ajar.xml",
                                            "glossy-plates.xml"};
-  std::printf("%-24s %5s %8s %8s %9s %s\n", "scene", "seed", "share", "CV", "ms", "separate");
+  std::printf("%-24s %5s %8s %8s %7s %9s %s\n", "scene", "seed", "share", "CV", "samples", "ms", "separate");
   for (const std::string& name : scenes) {
     SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + name);
     desc.camera.width = desc.camera.height = 256;
@@ -30,8 +32,9 @@ int main(int argc, char** argv) {
     for (int seed = 1; seed <= seeds; ++seed) {
       s.seed = uint64_t(seed);
       const DirectLightPilot p = directLightPilot(*scene, s);
-      std::printf("%-24s %5d %8.3f %8.2f %9.1f %s\n", name.c_str(), seed, p.share, p.cv, p.seconds * 1e3,
-                  p.separate ? "yes" : "no");
+      const std::string cv = p.cv >= 0 ? fmt::format("{:8.2f}", p.cv) : std::string("       -");  // not drawn
+      std::printf("%-24s %5d %8.3f %s %7d %9.1f %s\n", name.c_str(), seed, p.share, cv.c_str(), int(p.samples),
+                  p.seconds * 1e3, p.separate ? "yes" : "no");
     }
   }
   return 0;
