@@ -12,6 +12,9 @@
 #   BUDGETS=4,16  LONG_SCENES=cornell-box,caustic-mirror  LONG_METHODS=pt,bdpt,mmlt,pssmlt  LONG_BUDGETS=64
 #   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
+#   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
+#     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048 and REF_SPP=1024,
+#     so that each reference's noise floor is at most a tenth of the best method's error, where it is met)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
 # The references (bdpt, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
@@ -29,6 +32,14 @@ RUNS=${RUNS:-5}
 RES=${RES:-256}
 THREADS=${THREADS:-1}
 REF_SPP=${REF_SPP:-2048}
+REF_SPPS=${REF_SPPS:-}
+ref_spp() {  # scene -> its reference size: REF_SPPS's entry, else REF_SPP
+  local entry
+  for entry in ${REF_SPPS//,/ }; do
+    if [[ "${entry%%=*}" == "$1" ]]; then echo "${entry#*=}"; return; fi
+  done
+  echo "$REF_SPP"
+}
 BUILD=${BUILD:-build}
 WORK=${WORK:-$BUILD/results-work}
 PIN=()
@@ -48,7 +59,7 @@ if [[ "${PAGE_ONLY:-0}" != "1" ]]; then
     if [[ -z "$file" ]]; then echo "make-results.sh: no scenes/$1.xml or scenes/$1.pbrt" >&2; exit 2; fi
     echo "== $1 $2: $3 at $4 s ($(date -u +%H:%M:%S))"
     "${PIN[@]}" "$BUILD/tools/mltfarm" eval --scenes "$file" --methods "$3" --runs "$RUNS" \
-      --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$REF_SPP" \
+      --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$(ref_spp "$1")" \
       --no-maps --no-charts -q --out "$out"
   }
   for scene in ${SCENES//,/ }; do
