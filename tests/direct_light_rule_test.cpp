@@ -96,6 +96,32 @@ TEST(DirectLightRule, DrawsOnlyWhatCanChangeTheChoice) {
   EXPECT_EQ(directLightPilot(*caustic, cs, PilotUse::SizePass).samples, kPilotShareSamples);
 }
 
+// A second bootstrap of the same job (a time budget's, after its probe) takes the first one's pilot only
+// if it was run for the same use: a pilot that chose and stopped early (caustic-mirror) has too few of the
+// share's samples to size a pass, so a bootstrap that must size one runs its own.
+TEST(DirectLightRule, AnEarlierPilotIsTakenOnlyForTheSameUse) {
+  SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/caustic-mirror.xml");
+  desc.camera.width = desc.camera.height = 64;
+  const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
+  RenderSettings s = pilotSettings(64, 64, desc.maxDepth.value_or(5), 3);
+  s.mutationsPerPixel = 4;
+  const ChainJobSpec& mmlt = *findChainJobSpec("mmlt");
+  const MarkovChainBootstrap first = bootstrapMarkovChainJob(mmlt, *scene, s);  // DirectLight::Auto
+  ASSERT_TRUE(first.pilot);
+  EXPECT_EQ(first.pilot->samples, kPilotShareFirst);
+  const MarkovChainBootstrap again = bootstrapMarkovChainJob(mmlt, *scene, s, &first);
+  ASSERT_TRUE(again.pilot);
+  EXPECT_EQ(again.pilot->seconds, 0.0);  // taken, not run again
+  EXPECT_EQ(again.pilot->samples, kPilotShareFirst);
+  RenderSettings sized = s;
+  sized.directLight = DirectLight::Separate;
+  sized.spp = 0;
+  const MarkovChainBootstrap pass = bootstrapMarkovChainJob(mmlt, *scene, sized, &first);
+  ASSERT_TRUE(pass.pilot);
+  EXPECT_EQ(pass.pilot->samples, kPilotShareSamples);  // its own
+  EXPECT_FALSE(pass.pilot->decided);
+}
+
 // The share the pilot measures is the direct light's share of the image: bdpt limited to two segments
 // against bdpt at the full depth (64 spp on a 32x32 film: their ratio's noise is far below the pilot's),
 // within 4 standard errors of the mean of 8 pilots (their spread measured, not assumed).

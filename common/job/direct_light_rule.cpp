@@ -37,7 +37,8 @@ std::vector<ByLength> pilotSamples(const RenderScene& scene, const RenderSetting
   const int W = settings.width, H = settings.height, tiles = strata * strata;
   const uint64_t seed = hashKeys(settings.seed, kPilotStreamTag, tag);
   std::vector<ByLength> out(count);
-  tbb::parallel_for(tbb::blocked_range<uint64_t>(first, first + count, 64), [&](const tbb::blocked_range<uint64_t>& range) {
+  const tbb::blocked_range<uint64_t> samples(first, first + count, 64);
+  tbb::parallel_for(samples, [&](const tbb::blocked_range<uint64_t>& range) {
     PathContribution path;
     for (uint64_t i = range.begin(); i != range.end(); ++i) {
       const int g = int(i % uint64_t(tiles)), gx = g % strata, gy = g / strata;

@@ -37,8 +37,9 @@
 // The thresholds come from the bundled scenes at 256x256 (tests/bench/direct_light_rule_bench, 10 seeds;
 // docs/CHAINS.md): the scenes the pass helped have share 0.67-0.91 and CV 0.5-4.7 (cornell-spheres'
 // largest), the scenes it hurt CV 8.3 and more (glossy-plates' smallest), share 0.16 (door-ajar, CV
-// 6.5-7.1) or no direct light at all (caustic-mirror). The pilot is a pure function of the scene, the seed, the film and the integrator
-// settings (not of the thread count), so the resolved choice given explicitly reproduces the job.
+// 6.5-7.1) or no direct light at all (caustic-mirror). The pilot is a pure function of the scene, the
+// seed, the film and the integrator settings (not of the thread count), so the resolved choice given
+// explicitly reproduces the job.
 // The share also sizes the pass (mlt_job.h, directSppPerMutation), in its odds s / (1 - s), which is why
 // it takes 4096 samples: with 1024 the Cornell box's share ranged 64-83% over 8 seeds (a pass of 18 to 48
 // samples per 100 mutations per pixel), with 4096 74.1-79.8% over 3, with 8192 75.7-77.6% over 6. The
@@ -67,7 +68,7 @@ enum class PilotUse { Decide, SizePass };
 struct DirectLightPilot {
   uint64_t samples = 0;  // drawn in all
   double share = 0;    // of the pilot's luminance, in paths of at most kDirectMaxSegments segments
-  double cv = -1;      // the direct estimate's coefficient of variation per sample, within film strata; -1: not measured
+  double cv = -1;      // the direct estimate's CV per sample, within film strata; -1: not measured
   double seconds = 0;  // wall time of the pilot
   bool decided = false;   // run with PilotUse::Decide: `separate` is the rule's choice
   bool separate = false;  // the rule's choice: share >= kDirectMinShare && cv <= kDirectMaxCv

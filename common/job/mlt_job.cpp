@@ -216,10 +216,11 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   // DirectLight::Auto: the pilot decides (direct_light_rule.h), or an earlier bootstrap's pilot of the
   // same seed, film and integrator did; the bootstrap holds the choice, and the plan takes it from there.
   RenderSettings resolved = settings;
-  // (A pilot run only to size a pass measured no CV: it cannot stand in for one that must choose.)
+  // (Only a pilot run for the same use: one that only sized a pass measured no CV, and one that chose may
+  // have stopped before the share's last samples, which a pass's size needs.)
   const auto runPilot = [&](PilotUse use) {
     if (earlier && earlier->pilot && sameRaysInputs(earlier->settings, settings) &&
-        (earlier->pilot->decided || use == PilotUse::SizePass)) {
+        earlier->pilot->decided == (use == PilotUse::Decide)) {
       out.pilot = earlier->pilot;
       out.pilot->seconds = 0;  // not run again
     } else {

@@ -264,10 +264,10 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
     out += fmt::format("acceptance {:.1f}% ({})\n", 100 * r.acceptance, kinds);
   }
   if (separatesDirect(r.settings) || r.directShare >= 0) {
-    const std::string pilot =
-        r.directShare < 0 ? std::string("as asked")
-        : r.directCv >= 0 ? fmt::format("the pilot's choice: {:.1f}% of the light, CV {:.2f}", 100 * r.directShare, r.directCv)
-                          : fmt::format("the pilot's choice: {:.1f}% of the light, CV not measured", 100 * r.directShare);
+    const std::string cv = r.directCv >= 0 ? fmt::format("CV {:.2f}", r.directCv) : std::string("CV not measured");
+    const std::string pilot = r.directShare >= 0
+                                  ? fmt::format("the pilot's choice: {:.1f}% of the light, {}", 100 * r.directShare, cv)
+                                  : std::string("as asked");
     out += separatesDirect(r.settings)
                ? fmt::format("direct light (paths of at most {} segments): a {} pass of {} samples per pixel ({})\n",
                              kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
