@@ -13,8 +13,9 @@
 #   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
 #   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
-#     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048 and REF_SPP=1024,
-#     so that each reference's noise floor is at most a tenth of the best method's error, where it is met)
+#     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048,textured-serialized=2048
+#     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's
+#     error, where it is met)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
 # The references (bdpt, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
