@@ -11,7 +11,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-#include <utility>
 
 #include "common/core/color.h"
 #include "common/integrators/evaluators.h"
@@ -38,6 +37,17 @@ RenderSettings pilotSettings(int width, int height, int maxDepth, uint64_t seed)
   return s;
 }
 
+// A bundled scene on a res x res film, and a pilot's settings for it at the scene's own max depth.
+struct BundledPilot {
+  std::unique_ptr<RenderScene> scene;
+  RenderSettings settings;
+};
+BundledPilot bundledPilot(const std::string& file, int res, uint64_t seed) {
+  SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + file);
+  desc.camera.width = desc.camera.height = res;
+  return {RenderScene::build(desc), pilotSettings(res, res, desc.maxDepth.value_or(5), seed)};
+}
+
 TEST(DirectLightRule, PilotIsAPureFunctionOfItsInputs) {
   const std::unique_ptr<RenderScene> scene = RenderScene::build(test::smallCornellBox(48, 32));
   const RenderSettings s = pilotSettings(48, 32, 5, 7);
@@ -58,12 +68,7 @@ TEST(DirectLightRule, PilotIsAPureFunctionOfItsInputs) {
 // share's samples but not the CV's; a pilot that only sizes a pass draws every share sample and no CV; the
 // share is the same number whichever use drew it.
 TEST(DirectLightRule, DrawsOnlyWhatCanChangeTheChoice) {
-  const auto bundled = [](const std::string& file) {
-    SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + file);
-    desc.camera.width = desc.camera.height = 128;
-    return std::make_pair(RenderScene::build(desc), pilotSettings(128, 128, desc.maxDepth.value_or(5), 1));
-  };
-  const auto [caustic, cs] = bundled("caustic-mirror.xml");
+  const auto [caustic, cs] = bundledPilot("caustic-mirror.xml", 128, 1);
   const DirectLightPilot dark = directLightPilot(*caustic, cs);
   EXPECT_LT(dark.share, kPilotShareStop);
   EXPECT_EQ(dark.cv, -1.0);
@@ -71,7 +76,7 @@ TEST(DirectLightRule, DrawsOnlyWhatCanChangeTheChoice) {
   EXPECT_TRUE(dark.decided);
   EXPECT_FALSE(dark.separate);
 
-  const auto [door, ds] = bundled("door-ajar.xml");
+  const auto [door, ds] = bundledPilot("door-ajar.xml", 128, 1);
   const DirectLightPilot gap = directLightPilot(*door, ds);
   EXPECT_GE(gap.share, kPilotShareStop);
   EXPECT_LT(gap.share, kDirectMinShare);
@@ -100,10 +105,7 @@ TEST(DirectLightRule, DrawsOnlyWhatCanChangeTheChoice) {
 // if it was run for the same use: a pilot that chose and stopped early (caustic-mirror) has too few of the
 // share's samples to size a pass, so a bootstrap that must size one runs its own.
 TEST(DirectLightRule, AnEarlierPilotIsTakenOnlyForTheSameUse) {
-  SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/caustic-mirror.xml");
-  desc.camera.width = desc.camera.height = 64;
-  const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
-  RenderSettings s = pilotSettings(64, 64, desc.maxDepth.value_or(5), 3);
+  auto [scene, s] = bundledPilot("caustic-mirror.xml", 64, 3);
   s.mutationsPerPixel = 4;
   const ChainJobSpec& mmlt = *findChainJobSpec("mmlt");
   const MarkovChainBootstrap first = bootstrapMarkovChainJob(mmlt, *scene, s);  // DirectLight::Auto
@@ -159,11 +161,10 @@ TEST(DirectLightRule, SmoothDirectLightTakesThePassSpikyOrAbsentDoesNot) {
                                          {"textured-serialized.xml", true},
                                          {"glossy-plates.xml", false},
                                          {"caustic-mirror.xml", false}}) {
-    SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + c.file);
-    desc.camera.width = desc.camera.height = 256;
-    const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
+    auto [scene, s] = bundledPilot(c.file, 256, 1);
     for (const uint64_t seed : {uint64_t(1), uint64_t(2)}) {
-      const DirectLightPilot p = directLightPilot(*scene, pilotSettings(256, 256, desc.maxDepth.value_or(5), seed));
+      s.seed = seed;
+      const DirectLightPilot p = directLightPilot(*scene, s);
       std::printf("%s seed %d: share %.3f, CV %.2f, %.3f s\n", c.file.c_str(), int(seed), p.share, p.cv, p.seconds);
       EXPECT_EQ(p.separate, c.separate) << c.file << " seed " << seed << ": share " << p.share << ", CV " << p.cv;
       EXPECT_EQ(p.separate, p.share >= kDirectMinShare && p.cv <= kDirectMaxCv);
