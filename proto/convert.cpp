@@ -105,7 +105,7 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
     c->set_gaussian_sigma(s.gaussianSigma);
     c->set_splatting(splattingName(s.splatting));  // "": the method's
     c->set_direct_light(directLightName(s.directLight));
-    c->set_separate_direct(separatesDirect(s));  // for readers before direct_light
+    c->set_separate_direct(s.directLight == DirectLight::Separate);  // for readers before direct_light
     *c->mutable_direct() = samples;
   } else {
     *p.mutable_samples() = samples;
@@ -162,7 +162,7 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     const std::optional<DirectLight> d =
         name.empty() ? std::optional(p.chains().separate_direct() ? DirectLight::Separate : DirectLight::Auto)
                      : directLightFromName(name);
-    if (!d) throw WireError("settings.chains.direct_light", fmt::format("unknown '{}' (auto|chains|separate)", name));
+    if (!d) throw WireError("settings.chains.direct_light", fmt::format("unknown '{}' (auto|chains|separate|emission)", name));
     s.directLight = *d;
   }
   if (!chainMethod || samples.spp() != 0) {

@@ -204,12 +204,13 @@ TEST(CliSettings, DirectLightIsAutoUnlessGivenAndTravelsByName) {
   EXPECT_EQ(parseSubmit({"-m", "mmlt"}).settings.directLight, DirectLight::Auto);
   for (const auto& [name, value] : {std::pair<const char*, DirectLight>{"auto", DirectLight::Auto},
                                     {"chains", DirectLight::Chains},
-                                    {"separate", DirectLight::Separate}}) {
-    const std::vector<std::string> args{"-m", "veach-mlt", "--direct-light", name};
+                                    {"separate", DirectLight::Separate},
+                                    {"emission", DirectLight::Emission}}) {
+    const std::vector<std::string> args{"-m", "mmlt", "--direct-light", name};
     const CommandLineSettings r = parseRender(args), s = parseSubmit(args);
     expectSame(r, s);
     EXPECT_EQ(s.settings.directLight, value) << name;
-    EXPECT_EQ(s.settings.spp, value == DirectLight::Separate ? 0 : RenderSettings{}.spp) << name;
+    EXPECT_EQ(s.settings.spp, separatesDirect(s.settings) ? 0 : RenderSettings{}.spp) << name;
     const v1::RenderSettings wire = onTheWire(s);
     EXPECT_EQ(wire.chains().direct_light(), name);
     EXPECT_EQ(wire.chains().separate_direct(), value == DirectLight::Separate);  // for readers before direct_light

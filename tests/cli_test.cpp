@@ -234,7 +234,9 @@ TEST_F(Cli, AutomaticDirectLightSaysWhatItChose) {
   // Sized by the pilot's share (mlt_job.h, directSppPerMutation) at 2 mutations per pixel, and the log says so.
   DirectLightPilot pilot;
   pilot.share = n.at("directLightShare");
-  const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), &pilot), 2);
+  RenderSettings separate;
+  separate.directLight = DirectLight::Separate;
+  const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), separate, &pilot), 2);
   EXPECT_EQ(n.at("directSpp"), double(spp));
   EXPECT_NE(r.output.find(fmt::format("mmlt: the pt pass gets {} samples per pixel: ", spp)), std::string::npos) << r.output;
   EXPECT_TRUE(std::regex_search(r.output, std::regex(fmt::format("direct light \\(paths of at most 2 segments\\): a pt "

@@ -197,7 +197,7 @@ TEST(DirectLightRule, AutoIsThePlansExplicitChoice) {
       DirectLightPilot pilot;
       pilot.share = automatic.norm.directShare;
       EXPECT_EQ(automatic.settings.spp,
-                directSppFor(directSppPerMutation(*findChainJobSpec(method), &pilot), s.mutationsPerPixel));
+                directSppFor(directSppPerMutation(*findChainJobSpec(method), automatic.settings, &pilot), s.mutationsPerPixel));
     }
 
     RenderSettings explicitChoice = s;
@@ -220,6 +220,66 @@ TEST(DirectLightRule, AutoIsThePlansExplicitChoice) {
     addChainMetadata(makeChainReport(automatic, merged), m);
     EXPECT_EQ(m.numbers.count("directLightShare"), apart ? 1u : 0u) << method;
     EXPECT_EQ(m.numbers.at("separateDirect"), apart ? 1.0 : 0.0) << method;
+  }
+}
+
+// Where a light is small on the film and the pilot keeps the direct light in the chains, mmlt and rjmlt
+// render the lights seen directly by a pass of their own (DirectLight::Emission, mlt_job.h): glossy-plates'
+// spheres (three of four small at 64x64). The plan has no chains of length 1, a pass of
+// kEmissionSppPerMutation samples per mutation per pixel, and the explicit choice renders the same bits;
+// the image's metadata names the choice. A method with one chain over all lengths keeps the chains, and
+// is refused the choice when it is asked for.
+TEST(DirectLightRule, SmallLightsSeenDirectlyTakeAPassOfTheirOwn) {
+  const BundledPilot plates = bundledPilot("glossy-plates.xml", 64, 5);
+  for (const std::string method : {"mmlt", "rjmlt"}) {
+    RenderSettings s = plates.settings;
+    s.method = method;
+    s.mutationsPerPixel = 12;
+    s.bootstrapSamples = 4000;
+    const JobPlan automatic = planJob(*plates.scene, s);
+    ASSERT_EQ(automatic.settings.directLight, DirectLight::Emission) << method;
+    EXPECT_GE(automatic.norm.directShare, 0) << method << ": the pilot decided";
+    EXPECT_EQ(automatic.settings.spp, directSppFor(kEmissionSppPerMutation, s.mutationsPerPixel)) << method;
+    EXPECT_EQ(chainMinLength(automatic.settings), 2) << method;
+    ASSERT_GT(automatic.norm.mutationsPerLength.size(), 2u) << method;
+    EXPECT_EQ(automatic.norm.mutationsPerLength[1], 0u) << method << ": no chain of length 1";
+    size_t direct = 0;
+    for (const WorkUnit& u : automatic.units) direct += isDirectUnit(u) ? 1 : 0;
+    EXPECT_GT(direct, 0u) << method;
+
+    RenderSettings explicitChoice = s;
+    explicitChoice.directLight = DirectLight::Emission;
+    explicitChoice.spp = 0;
+    const JobPlan given = planJob(*plates.scene, explicitChoice);
+    EXPECT_LT(given.norm.directShare, 0) << method << ": no pilot ran";
+    auto merge = [&](const JobPlan& plan) {
+      PartialResult merged;
+      for (const WorkUnit& u : plan.units) merged.add(runWorkUnit(*plates.scene, plan, u));
+      return merged;
+    };
+    const PartialResult ma = merge(automatic), mb = merge(given);
+    const std::vector<Color> a = developImage(automatic, ma), b = developImage(given, mb);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Color)), 0) << method;
+    ImageMetadata m;
+    addChainMetadata(makeChainReport(automatic, ma), m);
+    EXPECT_EQ(m.strings.at("directLight"), "emission") << method;
+    EXPECT_EQ(m.numbers.at("separateDirect"), 0.0) << method << ": what files before directLight said";
+    EXPECT_EQ(m.numbers.at("directSpp"), double(automatic.settings.spp)) << method;
+    EXPECT_EQ(chainReportFromMetadata(m).settings.directLight, DirectLight::Emission) << method;
+  }
+  RenderSettings one = plates.settings;
+  one.method = "pssmlt-bdpt";
+  one.mutationsPerPixel = 4;
+  one.bootstrapSamples = 4000;
+  EXPECT_EQ(planJob(*plates.scene, one).settings.directLight, DirectLight::Chains);
+  one.directLight = DirectLight::Emission;
+  one.spp = 0;
+  try {
+    planJob(*plates.scene, one);
+    ADD_FAILURE() << "pssmlt-bdpt took a pass of the lights seen directly";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("direct light emission"), std::string::npos) << e.what();
   }
 }
 

@@ -178,7 +178,7 @@ TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
     s.spp = 0;
     const JobPlan automatic = planJob(cornell(), s);
     const DirectLightPilot pilot = directLightPilot(cornell(), automatic.settings);  // the film resolved
-    const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), &pilot), mpp);
+    const int spp = directSppFor(directSppPerMutation(*findChainJobSpec("mmlt"), s, &pilot), mpp);
     EXPECT_EQ(automatic.settings.spp, spp);
     EXPECT_LT(automatic.norm.directShare, 0);  // asked for, not the pilot's choice: no share recorded
     s.spp = spp;
@@ -211,21 +211,23 @@ TEST(MltJob, DirectPassWithoutSppIsSizedByTheMutations) {
 TEST(MltJob, DirectPassSizeFollowsTheShareOfTheLightItRenders) {
   const ChainJobSpec& mmlt = *findChainJobSpec("mmlt");
   const ChainJobSpec& bidir = *findChainJobSpec("pssmlt-bdpt");
+  RenderSettings separate;
+  separate.directLight = DirectLight::Separate;
   DirectLightPilot p;
   p.share = 0.8;  // odds 4
-  EXPECT_NEAR(directSppPerMutation(mmlt, &p), 4 * kDirectSppPerShareOdds, 1e-12);
+  EXPECT_NEAR(directSppPerMutation(mmlt, separate, &p), 4 * kDirectSppPerShareOdds, 1e-12);
   p.share = 0.9;  // odds 9: a scene whose chains carry half the light of the one above gets ~2.25x the pass
-  EXPECT_NEAR(directSppPerMutation(mmlt, &p), 9 * kDirectSppPerShareOdds, 1e-9);
-  EXPECT_NEAR(directSppPerMutation(bidir, &p), bidir.mutationCost() * 9 * kDirectSppPerShareOdds, 1e-9);
+  EXPECT_NEAR(directSppPerMutation(mmlt, separate, &p), 9 * kDirectSppPerShareOdds, 1e-9);
+  EXPECT_NEAR(directSppPerMutation(bidir, separate, &p), bidir.mutationCost() * 9 * kDirectSppPerShareOdds, 1e-9);
   for (double share : {0.96, 0.999, 1.0}) {
     p.share = share;
-    EXPECT_EQ(directSppPerMutation(mmlt, &p), kDirectMaxShareOdds * kDirectSppPerShareOdds) << share;
+    EXPECT_EQ(directSppPerMutation(mmlt, separate, &p), kDirectMaxShareOdds * kDirectSppPerShareOdds) << share;
   }
   p.share = 0;
-  EXPECT_EQ(directSppPerMutation(mmlt, &p), 0.0);  // still at least one sample per pixel (directSppFor)
-  EXPECT_EQ(directSppFor(directSppPerMutation(mmlt, &p), 10), 1);
-  EXPECT_EQ(directSppPerMutation(mmlt, nullptr), kDirectSppPerMutation);
-  EXPECT_EQ(directSppPerMutation(bidir, nullptr), bidir.mutationCost() * kDirectSppPerMutation);
+  EXPECT_EQ(directSppPerMutation(mmlt, separate, &p), 0.0);  // still at least one sample per pixel (directSppFor)
+  EXPECT_EQ(directSppFor(directSppPerMutation(mmlt, separate, &p), 10), 1);
+  EXPECT_EQ(directSppPerMutation(mmlt, separate, nullptr), kDirectSppPerMutation);
+  EXPECT_EQ(directSppPerMutation(bidir, separate, nullptr), bidir.mutationCost() * kDirectSppPerMutation);
   EXPECT_GT(bidir.mutationCost(), 1.0);  // a whole bdpt sample per mutation
   EXPECT_EQ(findChainJobSpec("rjmlt")->mutationCost(), 1.0);
 }

@@ -103,6 +103,17 @@ TEST(MltRender, SeparateDirectAgreesWithBdpt) {
   expectAgreesWithBdpt(s, "mmlt, direct by a pt pass");
 }
 
+// The lights seen directly by a pt pass at stratified pixel points, the chains from length 2 on
+// (DirectLight::Emission): the two together are the image bdpt renders.
+TEST(MltRender, EmissionPassAgreesWithBdpt) {
+  for (const char* m : {"mmlt", "rjmlt"}) {
+    RenderSettings s = cornellSettings(m);
+    s.directLight = DirectLight::Emission;
+    s.spp = 16;
+    expectAgreesWithBdpt(s, (std::string(m) + ", the lights seen directly by a pt pass").c_str());
+  }
+}
+
 TEST(MltRender, FurnaceSphereMatchesAnalyticRadiance) {
   const float Le = 1.0f, rho = 0.5f;
   const int maxDepth = 4;

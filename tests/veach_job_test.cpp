@@ -212,7 +212,10 @@ TEST(VeachJob, UnsupportedSettingsAndScenesAreRefused) {
   s.spp = 0;
   const DirectLightPilot pilot = directLightPilot(*box, s);  // the pass is sized by its share
   EXPECT_EQ(veach::planVeachJob(*box, s).settings.spp,
-            directSppFor(directSppPerMutation(*findChainJobSpec("veach-mlt"), &pilot), s.mutationsPerPixel));
+            directSppFor(directSppPerMutation(*findChainJobSpec("veach-mlt"), s, &pilot), s.mutationsPerPixel));
+  s.directLight = DirectLight::Emission;  // its light-view pass renders the lights seen directly
+  EXPECT_THROW(veach::planVeachJob(*box, s), std::invalid_argument);
+  s.directLight = DirectLight::Separate;
   // Point and spot lights are supported (path.h); directional and environment lights are refused, the
   // message naming the light and its type.
   const auto pointLights = RenderScene::build(test::cornellBoxPointSpot(16, 16));

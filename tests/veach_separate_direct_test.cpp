@@ -83,7 +83,7 @@ TEST(VeachSeparateDirect, PlanLeavesTheDirectPathsToTheDirectPass) {
 
   // Start paths: every strategy a chain can start from is longer than the direct pass's, and the
   // candidate's c is the bootstrap target's (which leaves the direct paths out).
-  const veach::PathSpace space(scene, 5, chainMinLength(true));
+  const veach::PathSpace space(scene, 5, chainMinLength(sd.settings));
   const VeachMltMethod method;
   const auto target = method.makeTarget(scene, sd.settings);
   PathContribution c;

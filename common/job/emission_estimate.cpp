@@ -48,6 +48,48 @@ void forRows(int height, bool parallel, const Body& body) {
 
 }  // namespace
 
+int emissionCellsPerPixelAxis(int width, int height) {
+  const double P = double(width) * double(height);
+  return int(std::max(1.0, std::ceil(std::sqrt(double(kEmissionMinCells) / P))));
+}
+
+std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* lights) {
+  const Camera& camera = scene.camera();
+  const int X = camera.width() * G, Y = camera.height() * G;
+  std::vector<uint8_t> marked(size_t(X) * size_t(Y), 0);
+  if (lights) *lights = 0;
+  constexpr int kSide = 64;  // kFootprintPoints = kSide^2, stratified over sampleLe's uPos
+  static_assert(kSide * kSide == int(kFootprintPoints));
+  std::vector<uint64_t> cells;
+  for (const std::unique_ptr<Light>& light : scene.lights()) {
+    if (light->deltaPosition() || light->infinite() || light->power().isBlack()) continue;  // never seen on the film
+    cells.clear();
+    bool small = true;
+    for (int i = 0; i < kSide * kSide && small; ++i) {
+      const Vec2 uPos{(float(i % kSide) + 0.5f) / kSide, (float(i / kSide) + 0.5f) / kSide};
+      const std::optional<LightLeSample> le = light->sampleLe(uPos, Vec2{0.5f, 0.5f});
+      if (!le) continue;
+      const std::optional<Vec2> r = camera.rasterPosition(le->ray.o);
+      if (!r) continue;
+      const int cx = std::clamp(int(r->x * float(G)), 0, X - 1), cy = std::clamp(int(r->y * float(G)), 0, Y - 1);
+      const uint64_t c = uint64_t(cy) * uint64_t(X) + uint64_t(cx);
+      if (std::find(cells.begin(), cells.end(), c) == cells.end()) cells.push_back(c);
+      small = cells.size() <= kFootprintMaxCells;
+    }
+    if (!small || cells.empty()) continue;  // a large light: the pilot sees it over many cells
+    if (lights) ++*lights;
+    for (uint64_t c : cells) {  // the footprint and its 8 neighbours (an outline the points did not reach)
+      const int cx = int(c % uint64_t(X)), cy = int(c / uint64_t(X));
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = cx + dx, yy = cy + dy;
+          if (xx >= 0 && yy >= 0 && xx < X && yy < Y) marked[size_t(yy) * size_t(X) + size_t(xx)] = 1;
+        }
+    }
+  }
+  return marked;
+}
+
 EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, bool parallel) {
   const int W = scene.camera().width(), H = scene.camera().height();  // the film
   if (W <= 0 || H <= 0) throw std::invalid_argument("emission estimate: empty film");
@@ -55,8 +97,7 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
   oneSegment.maxDepth = 1;  // Le at the first hit (or an environment light on a miss); no light sampling
   const std::unique_ptr<PathEvaluator> pt = makeEvaluator(scene, "pt", oneSegment);
   // Cells: G x G per pixel, so that there are at least kEmissionMinCells.
-  const double P = double(W) * double(H);
-  const int G = int(std::max(1.0, std::ceil(std::sqrt(double(kEmissionMinCells) / P))));
+  const int G = emissionCellsPerPixelAxis(W, H);
   const int X = W * G, Y = H * G;
   const size_t C = size_t(X) * size_t(Y);
   // A ray through cell (cx, cy) at u in the cell.
@@ -77,27 +118,37 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
       pilot[j] = seen(source, path, x, y, Vec2{source.valueAt(3, 0), source.valueAt(3, 1)});
     }
   });
-  uint64_t lit = 0;
-  double pilotSum = 0, pilotMax = 0;  // in index order: deterministic
-  for (double v : pilot) {
+  // 1b. The cells of the small lights, from their geometry (a light about a cell wide the pilot's one ray
+  // per cell may miss or hit: either way its 3x3 test cannot see the light's outline).
+  uint64_t smallLights = 0;
+  const std::vector<uint8_t> small = smallLightCells(scene, G, &smallLights);
+  uint64_t lit = 0, smallCells = 0;
+  double pilotSum = 0, pilotMax = 0;  // in index order: deterministic; the max over the cells not marked
+  for (size_t j = 0; j < C; ++j) {
+    const double v = pilot[j];
     lit += v > 0 ? 1 : 0;
+    smallCells += small[j];
     pilotSum += v;
-    pilotMax = std::max(pilotMax, v);
+    if (!small[j]) pilotMax = std::max(pilotMax, v);
   }
   EmissionEstimate out;
   out.cellsPerPixelAxis = G;
   out.litCells = lit;
+  out.smallLights = smallLights;
   out.maxCellShare = pilotSum > 0 ? pilotMax / pilotSum : 0.0;
   out.rays = uint64_t(C);
-  if (!(out.maxCellShare > 0 && out.maxCellShare < kEmissionMaxCellShare)) return out;  // not estimated
+  // Not estimated: a cell the geometry did not mark holds too much of the pilot's emission, or nothing is
+  // seen (no emission in the pilot and no small light).
+  if (out.maxCellShare >= kEmissionMaxCellShare || (!(pilotSum > 0) && smallCells == 0)) return out;
   out.estimated = true;
-  // Cells whose 3x3 neighbourhood (clipped to the film) the pilot saw as one value are flat.
+  // Cells whose 3x3 neighbourhood (clipped to the film) the pilot saw as one value are flat, unless a small
+  // light's footprint marks them.
   std::vector<uint8_t> edge(C, 0);
   uint64_t edges = 0;
   for (int y = 0; y < Y; ++y)
     for (int x = 0; x < X; ++x) {
       const double v = pilot[size_t(y) * X + x];
-      bool flat = true;
+      bool flat = !small[size_t(y) * X + x];
       for (int dy = -1; dy <= 1 && flat; ++dy)
         for (int dx = -1; dx <= 1 && flat; ++dx) {
           const int xx = x + dx, yy = y + dy;

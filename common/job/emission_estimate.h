@@ -30,6 +30,7 @@
 // scales them comes from here.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
@@ -42,15 +43,26 @@ constexpr uint32_t kEmissionFlatRays = 2;   // two replicates of one ray: a pixe
 constexpr uint32_t kEmissionEdgeRays = 256;  // even
 constexpr double kEmissionEdgeBudget = 4;   // rays per cell for the outlines, at most
 constexpr uint64_t kEmissionMinCells = uint64_t(1) << 16;
-// Where one cell of the pilot holds kEmissionMaxCellShare or more of the pilot's emission (or the pilot saw
-// none), the bootstrap keeps the candidates' b_1 (mlt_job.cpp): a light a few pixels wide and very bright
-// is what camera rays sample worst (a ray hits it or not: the cell's estimate swings by its whole value)
-// and what the candidates' light-tracing technique (1, 1) samples best. glossy-plates' four spheres of
-// equal power (radius 0.03 to 0.9, the smallest ~1 pixel wide at 256x256, radiance 1111) each hold a
-// quarter of b_1: the rays' b_1 had 20% standard error against the candidates' 15% at 1024 of them, and
-// mmlt's relMSE at 16 s was 19% worse (median of 12 seeds). A uniform light of N cells holds 1/N per cell
-// (the Cornell box's: 0.3%). The choice reads the pilot only, which is independent of both estimates, so
-// whichever is chosen stays unbiased.
+// A light about a cell wide is what the pilot reads worst: its one ray per cell hits the light or misses
+// it, and either way the 3x3 test cannot find the outline (a cell that missed looks like dark space, one
+// that hit like a bright cell among its equals' neighbours only by chance). So the light's geometry marks
+// its cells: kFootprintPoints points of every area light (stratified over sampleLe's position numbers),
+// projected onto the film through the lens centre; a light whose points land in at most
+// kFootprintMaxCells cells is small, and those cells and their 8 neighbours get the outline's count of rays
+// whatever the pilot saw (smallLightCells). A larger light covers enough cells for the pilot to see it.
+// The marks are a pure function of the scene, independent of the stage-2 rays, so the estimate stays
+// unbiased (a thin-lens camera's blur or an occluder only makes a mark cost rays it did not need).
+// glossy-plates' four spheres of equal power (radius 0.03 to 0.9, the smallest ~1 pixel wide at 256x256,
+// radiance 1111) each hold a quarter of b_1: without the marks the pilot's cell on the smallest held ~25% of
+// its emission (or, missed, left the cell "flat" with 2 rays), so b_1 came from the candidates and mmlt's
+// large steps at ~7% standard error at 16 s, most of the image's brightness error there (docs/CHAINS.md).
+// Where a cell the marks do not cover still holds kEmissionMaxCellShare or more of the pilot's emission (a
+// long light thinner than a cell, which the marks leave to the pilot), or nothing is seen at all, the
+// bootstrap keeps the candidates' b_1 (mlt_job.cpp); a uniform light of N cells holds 1/N per cell (the
+// Cornell box's: 0.3%). The choice reads the pilot and the geometry only, which are independent of both
+// estimates, so whichever is chosen stays unbiased.
+constexpr uint32_t kFootprintPoints = 4096;
+constexpr uint64_t kFootprintMaxCells = 256;
 constexpr double kEmissionMaxCellShare = 0.01;
 // What one of these camera rays costs in the bootstrap's unit (numbers drawn by a candidate, bootstrap.h
 // candidateCost), so that the bootstrap's budget counts them: measured on one thread at 256x256, a ray
@@ -64,13 +76,20 @@ struct EmissionEstimate {
   uint64_t rays = 0;            // pilot + stage 2
   int cellsPerPixelAxis = 1;    // G
   uint64_t litCells = 0;        // cells whose pilot ray saw emission
-  double maxCellShare = 0;      // the largest pilot value over their sum (0: the pilot saw no emission)
+  uint64_t smallLights = 0;     // lights whose footprint marked their cells (smallLightCells)
+  double maxCellShare = 0;      // the largest pilot value of a cell not marked, over the pilot's sum
   uint64_t edgeCells = 0;       // cells given the outline's count
   uint32_t edgeRays = 0;        // rays of each such cell
 };
 
+// G, the cells per pixel axis of a width x height film: at least kEmissionMinCells cells in all.
+int emissionCellsPerPixelAxis(int width, int height);
+// The cells (G x G per pixel, row-major) marked by small lights' footprints, 1 = marked; *lights: how many
+// lights marked some.
+std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* lights = nullptr);
+
 // (E1) for the scene camera's film, or only the pilot where it says the rays would sample b_1 badly
-// (estimated = false: maxCellShare is 0 or at least kEmissionMaxCellShare). A pure function of (scene, settings.seed,
+// (estimated = false: maxCellShare at least kEmissionMaxCellShare, or no emission seen and no small light). A pure function of (scene, settings.seed,
 // settings.integrator). The estimate is of the whole b_1: no tail split (tau = infinity, so the chains'
 // large steps of length 1 are summed whole too). Its sampleVar and bulkVar are left 0 for the caller: the
 // variance of c_1 per uniform sample (the candidates', which run after this pilot decided whether they

@@ -44,7 +44,7 @@ uint64_t defaultChains(uint64_t totalMutations) {
 
 bool isDirectUnit(const WorkUnit& u) { return u.mutations == 0 && u.sampleEnd > u.sampleBegin; }
 
-int chainMinLength(bool separateDirect) { return separateDirect ? kDirectMaxSegments + 1 : 1; }
+int chainMinLength(const RenderSettings& s) { return directPassSegments(s) + 1; }
 
 std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& s) {
   if (!spec.chainsPerLength()) return {-1};
@@ -52,17 +52,18 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
     throw std::invalid_argument("settings: " + spec.name() + " needs a max depth >= 1 or -1 (unlimited), got " +
                                 std::to_string(s.integrator.maxDepth));
   // Unlimited: the first block; the bootstrap adds blocks while they carry light (bootstrapMarkovChainJob).
-  const int kMin = chainMinLength(separatesDirect(s));
+  const int kMin = chainMinLength(s);
   const int kMax = s.integrator.maxDepth < 0 ? kMin + kUnlimitedLengthBlock - 1 : s.integrator.maxDepth;
   std::vector<int> lengths;
   for (int k = kMin; k <= kMax; ++k) lengths.push_back(k);
   return lengths;
 }
 
-double directSppPerMutation(const ChainJobSpec& spec, const DirectLightPilot* pilot) {
+double directSppPerMutation(const ChainJobSpec& spec, const RenderSettings& s, const DirectLightPilot* pilot) {
+  if (s.directLight == DirectLight::Emission) return kEmissionSppPerMutation;  // one ray a sample, whatever the method
   if (!pilot) return spec.mutationCost() * kDirectSppPerMutation;
-  const double s = std::clamp(pilot->share, 0.0, 1.0);
-  const double odds = s < 1 ? std::min(s / (1 - s), kDirectMaxShareOdds) : kDirectMaxShareOdds;
+  const double share = std::clamp(pilot->share, 0.0, 1.0);
+  const double odds = share < 1 ? std::min(share / (1 - share), kDirectMaxShareOdds) : kDirectMaxShareOdds;
   return spec.mutationCost() * kDirectSppPerShareOdds * odds;
 }
 
@@ -133,12 +134,12 @@ namespace {
 
 
 
-// Settings of the direct-illumination pass (separateDirect): kDirectPassMethod limited to kDirectMaxSegments.
+// Settings of the direct pass (separateDirect): kDirectPassMethod limited to directPassSegments.
 JobPlan directPlan(const JobPlan& plan) {
   JobPlan d;
   d.settings = plan.settings;
   d.settings.method = kDirectPassMethod;
-  d.settings.integrator.maxDepth = kDirectMaxSegments;
+  d.settings.integrator.maxDepth = directPassSegments(plan.settings);
   return d;
 }
 
@@ -192,6 +193,9 @@ void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
   if (!spec.allowsSeparateDirect())
     throw std::invalid_argument("settings: " + spec.name() +
                                 " cannot leave out the direct light (direct light separate): its splats do not carry the path length");
+  if (s.directLight == DirectLight::Emission && !spec.chainsPerLength())
+    throw std::invalid_argument("settings: direct light emission (a pass for the lights seen directly) needs chains per "
+                                "path length (mmlt, rjmlt); " + spec.name() + " takes chains or separate");
   if (s.spp < 0)
     throw std::invalid_argument("settings: the direct pass (direct light separate) needs spp >= 1 (or 0: sized by the "
                                 "mutations per pixel), got " + std::to_string(s.spp));
@@ -236,17 +240,30 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       resolved = withDirectLightChoice(settings, DirectLight::Chains);
     } else {
       const DirectLightPilot p = runPilot(PilotUse::Decide);
-      resolved = withDirectLightChoice(settings, p.separate ? DirectLight::Separate : DirectLight::Chains);
+      DirectLight choice = p.separate ? DirectLight::Separate : DirectLight::Chains;
+      // The lights seen directly by a pass where one is small on the film (kEmissionSppPerMutation: why).
+      uint64_t smallLights = 0;
+      if (choice == DirectLight::Chains && spec.chainsPerLength()) {
+        const int G = emissionCellsPerPixelAxis(scene.camera().width(), scene.camera().height());
+        smallLightCells(scene, G, &smallLights);
+        if (smallLights > 0) choice = DirectLight::Emission;
+      }
+      resolved = withDirectLightChoice(settings, choice);
+      const std::string chosen =
+          choice == DirectLight::Separate ? fmt::format("by a {} pass (--direct-light separate)", kDirectPassMethod)
+          : choice == DirectLight::Emission
+              ? fmt::format("in the chains, but the lights seen directly by a {} pass, {} of them small on the film "
+                            "(--direct-light emission)", kDirectPassMethod, smallLights)
+              : std::string("in the chains (--direct-light chains)");
       spdlog::info("{}: direct light {}: the pilot's {} bdpt samples put {:.1f}% of the light in paths of at most {} "
                    "segments, {} (a pass is taken from {:.0f}% and up to a CV of {:.1f}; {})",
-                   spec.name(), p.separate ? fmt::format("by a {} pass (--direct-light separate)", kDirectPassMethod)
-                              : std::string("in the chains (--direct-light chains)"),
+                   spec.name(), chosen,
                    p.samples, 100 * p.share, kDirectMaxSegments,
                    p.cv >= 0 ? fmt::format("their one-bounce light a CV of {:.2f} per sample", p.cv)
                              : std::string("too little for a pass (its CV not measured)"),
                    100 * kDirectMinShare, kDirectMaxCv, pilotCost(p));
     }
-  } else if (separatesDirect(settings) && settings.spp == 0) {
+  } else if (settings.directLight == DirectLight::Separate && settings.spp == 0) {
     // The pass asked for, its size left to the plan: sized by the pilot's share like a chosen one (the plan
     // logs the share and the size).
     const DirectLightPilot p = runPilot(PilotUse::SizePass);
@@ -304,7 +321,13 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   }
   out.emission = e1;
   const bool raysForLengthOne = e1 && e1->estimated;
-  if (raysForLengthOne) bc.seedOnlyLengths = {1};
+  // Length 1's candidates then only seed its chains and keep the first round's count, unless a small light
+  // is seen (smallLightCells): its chains hardly move between lights (a large step from a light ~1 pixel
+  // wide to another is accepted in proportion to their radiances), so the share of each light in the
+  // image is the share of the chains that start there, drawn from the candidates; they need the count
+  // their variance asks for (glossy-plates: with the first round's 23584 the smallest sphere's share was
+  // off by +79% and the others' by -22 to -30% in a run at 240 mutations per pixel).
+  if (raysForLengthOne && e1->smallLights == 0) bc.seedOnlyLengths = {1};
   if (e1 && bc.totalCandidates > 0) bc.spentCost = double(e1->rays) * kEmissionRayCost;  // the rays share the budget
   out.result = runBinnedBootstrap(bc, candidates);
   if (out.pilot) out.result.seconds += out.pilot->seconds;  // the pilot is part of the bootstrap's cost
@@ -399,12 +422,17 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   RenderSettings s = resolveChainSettings(spec, withDirectLightChoice(settings, bootstrap.settings.directLight));
   if (separatesDirect(s) && s.spp == 0) {  // the pass sized by the plan: by the pilot's share where there is one
     const DirectLightPilot* pilot = bootstrap.pilot ? &*bootstrap.pilot : nullptr;
-    const double r = directSppPerMutation(spec, pilot);
+    const double r = directSppPerMutation(spec, s, pilot);
     s.spp = directSppFor(r, s.mutationsPerPixel);
-    spdlog::info("{}: the {} pass gets {} samples per pixel: {:.3g} per mutation per pixel ({}; mutation cost {:g})",
-                 spec.name(), kDirectPassMethod, s.spp, r,
-                 pilot ? fmt::format("the pilot's share {:.1f}% of the light", 100 * pilot->share)
-                       : std::string("no pilot"), spec.mutationCost());
+    spdlog::info("{}: the {} pass{} gets {} samples per pixel: {:.3g} per mutation per pixel ({})", spec.name(),
+                 kDirectPassMethod, s.directLight == DirectLight::Emission ? " of the lights seen directly" : "",
+                 s.spp, r,
+                 s.directLight == DirectLight::Emission
+                     ? std::string("kEmissionSppPerMutation")
+                     : fmt::format("{}; mutation cost {:g}",
+                                   pilot ? fmt::format("the pilot's share {:.1f}% of the light", 100 * pilot->share)
+                                         : std::string("no pilot"),
+                                   spec.mutationCost()));
   }
   if (!(s.mutationsPerPixel > 0 && std::isfinite(s.mutationsPerPixel)))
     throw std::invalid_argument("settings: mutations per pixel must be > 0, got " + std::to_string(s.mutationsPerPixel));
@@ -485,7 +513,10 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
                s.method, norm.b, norm.bStdErr, norm.bootstrapSamples, norm.bootstrapSeconds,
                "refined as the chains run",
                plan.settings.chains, norm.totalMutations, s.mutationsPerPixel,
-               separatesDirect(s) ? fmt::format(", direct light by {}", kDirectPassMethod) : std::string());
+               separatesDirect(s) ? fmt::format(", {} by {}", s.directLight == DirectLight::Emission
+                                                                  ? "the lights seen directly" : "direct light",
+                                                kDirectPassMethod)
+                                  : std::string());
   return plan;
 }
 
@@ -494,7 +525,8 @@ PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const
   if (!separatesDirect(plan.settings)) throw std::invalid_argument("work unit " + std::to_string(unit.index) + " is a sample batch, but the plan has no direct pass");
   const JobPlan d = directPlan(plan);
   const auto evaluator = makeEvaluator(scene, d.settings.method, d.settings.integrator);
-  PartialResult r = runSampleUnit(*evaluator, d, unit);  // t = 1 splats in layer 0, developed with P / N
+  // t = 1 splats in layer 0, developed with P / N; the lights seen directly at stratified pixel points.
+  PartialResult r = runSampleUnit(*evaluator, d, unit, nullptr, plan.settings.directLight == DirectLight::Emission);
   r.samples = 0;  // samples count mutations in a Markov chain job
   return r;
 }

@@ -75,9 +75,9 @@ class ChainJobSpec {
   }
 };
 
-// The shortest path length a per-length method's chains cover: 1, or kDirectMaxSegments + 1 when the
+// The shortest path length a per-length method's chains cover: 1, or directPassSegments + 1 when the
 // direct pass renders the shorter ones (separateDirect).
-int chainMinLength(bool separateDirect);
+int chainMinLength(const RenderSettings& settings);
 
 // The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
 // method, width/height, integrator, directLight (Auto resolved by the pilot), bootstrapSamples resolved by
@@ -165,7 +165,22 @@ inline constexpr const char* kDirectPassMethod = "pt";
 constexpr double kDirectSppPerShareOdds = 0.15;
 constexpr double kDirectMaxShareOdds = 19;
 constexpr double kDirectSppPerMutation = 0.5;
-double directSppPerMutation(const ChainJobSpec& spec, const DirectLightPilot* pilot);
+// The lights seen directly by a pass of their own (DirectLight::Emission; mmlt and rjmlt, whose chains have
+// a length 1 to leave out). Chosen by the bootstrap (--direct-light auto) where the pilot keeps the direct
+// light in the chains and a light is small on the film (emission_estimate.h, smallLightCells: its points
+// land in at most kFootprintMaxCells cells). Why: length 1's chains hardly move from one light to another
+// (a large step from a light a pixel wide to a larger one is accepted in proportion to their radiances, and
+// small steps stay on the light), so each light's brightness in the image is the share of the chains that
+// started on it: on glossy-plates (four spheres of equal power, radius 0.03 to 0.9) mmlt's spheres came out
+// -87% to +79% off in single runs at 240 mutations per pixel, with b_1 itself right to 0.6%. A pt pass of one
+// segment (a camera ray, Le where it lands) renders each pixel on its own, so no light takes another's
+// light; it costs a ray a sample: kEmissionSppPerMutation samples per pixel per mutation per pixel (~3% of
+// the job's time at mmlt's ~1 M mutations/s and ~4 M rays/s per thread) and the chains no longer spend
+// mutations on length 1 (13% of glossy-plates' went there).
+constexpr double kEmissionSppPerMutation = 0.125;
+// Samples of the pass per mutation per pixel (directSppFor): kEmissionSppPerMutation for Emission; for
+// Separate the rule above, from the pilot's share.
+double directSppPerMutation(const ChainJobSpec& spec, const RenderSettings& settings, const DirectLightPilot* pilot);
 int directSppFor(double sppPerMutation, double mutationsPerPixel);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0,
 // splatting). The direct pass's size (spp 0) is left to the plan, which has the pilot: directSppFor.

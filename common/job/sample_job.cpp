@@ -72,7 +72,7 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
 }
 
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
-                            TechniqueFilms* techniques) {
+                            TechniqueFilms* techniques, bool stratifiedPixels) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   if (unit.sampleEnd <= unit.sampleBegin || unit.sampleEnd > uint32_t(s.spp))
@@ -106,7 +106,9 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
         for (int y = y0; y < y1; ++y) {
           for (int x = x0; x < x1; ++x) {
             const uint64_t pixelIndex = uint64_t(y) * uint64_t(width) + uint64_t(x);
-            source.reset(hashKeys(s.seed, pixelIndex), k);
+            const uint64_t key = hashKeys(s.seed, pixelIndex);
+            source.reset(key, k);
+            if (stratifiedPixels) source.setPixelPoint(stratifiedPixelPoint(key, k, uint32_t(s.spp)));
             const Vec2 pixel{float(x), float(y)};
             contribution.clear();
             evaluator.evaluate(source, &pixel, contribution);

@@ -44,8 +44,12 @@ struct TechniqueFilms {
   static int index(int s, int t) { const int L = s + t - 1; return (L - 1) * (L + 2) / 2 + s; }
   static int count(int maxLength) { return index(0, maxLength + 2); }  // first index of length maxLength+1
 };
+// stratifiedPixels: sample k of a pixel's spp lies at stratifiedPixelPoint(its pixel's key, k, spp) instead
+// of a hashed point (each point is still uniform on the pixel, so a pixel's mean of any set of its samples
+// stays unbiased; the spp of them cover it evenly). The pass of the lights seen directly takes it
+// (DirectLight::Emission): a light a pixel wide is an outline in every pixel it touches.
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
-                            TechniqueFilms* techniques);
+                            TechniqueFilms* techniques, bool stratifiedPixels = false);
 
 std::vector<Color> developSampleImage(const JobPlan& plan, const PartialResult& merged);
 

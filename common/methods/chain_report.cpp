@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "common/job/mlt_job.h"
 #include "common/methods/pss_method.h"
 #include "common/methods/registry.h"
+#include "common/settings/direct_light_name.h"
 #include "common/settings/splatting_name.h"
 
 namespace mlt {
@@ -98,7 +100,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   if (method && method->chainsPerLength()) {
     const auto& proposed = merged.stats.proposedPerLength;
     const auto& accepted = merged.stats.acceptedPerLength;
-    for (int k = chainMinLength(separatesDirect(s)); k < int(norm.bk.size()); ++k) {
+    for (int k = chainMinLength(s); k < int(norm.bk.size()); ++k) {
       ChainLengthReport l;
       l.k = k;
       l.bk = size_t(k) < refined.perSlot.size() ? refined.perSlot[size_t(k)].b : 0.0;
@@ -140,7 +142,8 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   if (!r.kinds.empty()) m.strings["mutationKinds"] = kindList;
   const RenderSettings& s = r.settings;
   m.numbers["largeStepProb"] = s.largeStepProb;
-  m.numbers["separateDirect"] = separatesDirect(s) ? 1 : 0;
+  m.numbers["separateDirect"] = s.directLight == DirectLight::Separate ? 1 : 0;  // as files before "directLight" say
+  m.strings["directLight"] = directLightName(s.directLight);
   if (separatesDirect(s)) m.numbers["directSpp"] = s.spp;  // the pass's samples per pixel
   if (r.directShare >= 0) {  // the plan chose it (--direct-light auto): what the pilot measured
     m.numbers["directLightShare"] = r.directShare;
@@ -206,6 +209,8 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   }
   if (const auto it = m.numbers.find("largeStepProb"); it != m.numbers.end()) r.settings.largeStepProb = float(it->second);
   r.settings.directLight = number(m, "separateDirect") != 0 ? DirectLight::Separate : DirectLight::Chains;
+  if (const auto it = m.strings.find("directLight"); it != m.strings.end())
+    if (const std::optional<DirectLight> d = directLightFromName(it->second)) r.settings.directLight = *d;
   if (m.numbers.count("directSpp")) r.settings.spp = int(number(m, "directSpp"));
   if (const auto it = m.strings.find("kernel"); it != m.strings.end() && it->second == "gaussian") {
     r.settings.kernel = MutationKernel::Gaussian;
@@ -268,7 +273,11 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
     const std::string pilot = r.directShare >= 0
                                   ? fmt::format("the pilot's choice: {:.1f}% of the light, {}", 100 * r.directShare, cv)
                                   : std::string("as asked");
-    out += separatesDirect(r.settings)
+    out += r.settings.directLight == DirectLight::Emission
+               ? fmt::format("direct light (paths of at most {} segments): the lights seen directly by a {} pass of {} "
+                             "samples per pixel, one bounce in the chains ({}; a small light on the film)\n",
+                             kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
+           : separatesDirect(r.settings)
                ? fmt::format("direct light (paths of at most {} segments): a {} pass of {} samples per pixel ({})\n",
                              kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
                : fmt::format("direct light (paths of at most {} segments): in the chains ({})\n", kDirectMaxSegments,

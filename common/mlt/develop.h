@@ -91,7 +91,7 @@
 
 namespace mlt {
 
-constexpr int kDirectMaxSegments = 2;  // separateDirect: emission seen directly (1) and one bounce (2)
+constexpr int kDirectMaxSegments = 2;  // DirectLight::Separate: emission seen directly (1) and one bounce (2)
 constexpr int kQuantumExp = 26;
 
 // (D1): the splat scale of one length's film layer.

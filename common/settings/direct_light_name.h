@@ -7,11 +7,12 @@
 
 namespace mlt {
 
-// "auto", "chains", "separate".
+// "auto", "chains", "separate", "emission".
 inline const char* directLightName(DirectLight d) {
   switch (d) {
     case DirectLight::Chains: return "chains";
     case DirectLight::Separate: return "separate";
+    case DirectLight::Emission: return "emission";
     case DirectLight::Auto: break;
   }
   return "auto";
@@ -19,7 +20,7 @@ inline const char* directLightName(DirectLight d) {
 
 // The inverse of directLightName; nullopt for any other text.
 inline std::optional<DirectLight> directLightFromName(std::string_view name) {
-  for (DirectLight d : {DirectLight::Auto, DirectLight::Chains, DirectLight::Separate})
+  for (DirectLight d : {DirectLight::Auto, DirectLight::Chains, DirectLight::Separate, DirectLight::Emission})
     if (name == directLightName(d)) return d;
   return std::nullopt;
 }

@@ -34,8 +34,10 @@ enum class MutationKernel { Kelemen, Gaussian };  // Kelemen 2002 exponential (s
 enum class MltSplatting { MethodDefault, ExpectedValue, KelemenMIS };
 // How a chain method renders paths of at most two segments (the direct light): Auto, the plan decides
 // from a pilot (common/job/direct_light_rule.h) and holds the value used; Chains, the chains carry them
-// with the rest; Separate, a pt pass renders them (kDirectPassMethod) and the chains carry only longer paths.
-enum class DirectLight { Auto, Chains, Separate };
+// with the rest; Separate, a pt pass renders them (kDirectPassMethod) and the chains carry only longer paths;
+// Emission (mmlt, rjmlt), a pt pass renders the lights seen directly (paths of one segment) and the chains
+// every longer path (mlt_job.h, kEmissionSppPerMutation: why).
+enum class DirectLight { Auto, Chains, Separate, Emission };
 
 // A method's own parameters: name -> value as text (the method's ParamSpec says how to read it).
 using MethodParams = std::map<std::string, std::string>;
@@ -66,9 +68,16 @@ struct RenderSettings {
   double timeBudgetSeconds = 0;                   // 0 = no time budget (local renderer only)
 };
 
-// Whether the job renders its direct light by a pass of its own (a planned job's settings hold Chains or
-// Separate; Auto, not yet decided, counts as no pass).
-inline bool separatesDirect(const RenderSettings& s) { return s.directLight == DirectLight::Separate; }
+// Whether the job renders its shortest paths by a pass of its own (a planned job's settings hold Chains,
+// Separate or Emission; Auto, not yet decided, counts as no pass).
+inline bool separatesDirect(const RenderSettings& s) {
+  return s.directLight == DirectLight::Separate || s.directLight == DirectLight::Emission;
+}
+// The longest paths (in segments) the pass renders: 2 (Separate: emission seen directly and one bounce),
+// 1 (Emission), 0 (no pass). The chains carry the longer ones.
+inline int directPassSegments(const RenderSettings& s) {
+  return s.directLight == DirectLight::Separate ? 2 : s.directLight == DirectLight::Emission ? 1 : 0;
+}
 
 // Whether spp comes from the scene's sampler sample_count (when it has one): only when the user gave no
 // spp, renders by samples (a time budget sizes the job itself) and asks for no direct pass (its spp is

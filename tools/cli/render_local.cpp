@@ -151,7 +151,7 @@ JobPlan planChainsForTimeBudget(const RenderScene& scene, RenderSettings s, Cloc
                     double(std::max(threads, 1));
     if (s.spp == 0 || s.directLight == DirectLight::Auto) {  // sized by the plan: grows with the mutations
       directSecondsPerMpp = directSeconds / double(trialPlan.settings.spp) *
-                            directSppPerMutation(*method, boot.pilot ? &*boot.pilot : nullptr);
+                            directSppPerMutation(*method, trialPlan.settings, boot.pilot ? &*boot.pilot : nullptr);
       directSeconds = 0;
     }
   }

@@ -101,7 +101,7 @@ PartialResult runVeachChain(const RenderScene& scene, const JobPlan& plan, const
   if (isDirectUnit(unit)) return runDirectUnit(scene, plan, unit);  // separateDirect: bdpt, as for every method
   if (unit.mutations == 0) throw std::invalid_argument("veach-mlt: work unit " + std::to_string(unit.index) + " has no mutations");
   const uint32_t sppLV = lightViewSpp(mutations.lightView, s.mutationsPerPixel);
-  const PathSpace space(scene, s.integrator.maxDepth, chainMinLength(separatesDirect(s)), sppLV > 0);
+  const PathSpace space(scene, s.integrator.maxDepth, chainMinLength(s), sppLV > 0);
 
   // Start: replay the candidate, then pick one of its strategies.
   Pcg32 pick = chainRng(s.seed, unit.index, 3);

@@ -19,7 +19,7 @@
 // MLT only for indirect illumination"): paths
 // of at most kDirectMaxSegments segments are rendered by the shared direct pass (pt sample batches after
 // the chains: isDirectUnit / runDirectUnit of mlt_job.h, layer 0, P / N at develop). The chains' space is
-// the longer paths only (PathSpace minEdges = chainMinLength(true): f = 0 on the shorter, so moves to them
+// the longer paths only (PathSpace minEdges = chainMinLength(s) = 3: f = 0 on the shorter, so moves to them
 // are rejected), and their b, bootstrap candidates and start strategies leave the direct paths out as
 // mmlt's do (EvaluatorPssTarget with separateDirect; startPathFromSample skips those strategies).
 // Light views (light_view.h; on unless veach-light-view is 0): the paths E S* L are not in the chains'
