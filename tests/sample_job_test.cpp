@@ -147,13 +147,12 @@ TEST(JobApi, SampleUnitIsBitIdenticalWhateverTheThreadCount) {
   }
 }
 
-// stratifiedPixels (the pass of the lights seen directly): a pixel's spp samples lie at its rotated
-// Hammersley points, so their positions in the pixel average to its centre within half a stratum, 0.5 / spp
+// PixelSampling (the pass of the lights seen directly): stratified, a pixel's n samples lie at its rotated
+// Hammersley points, so their positions in the pixel average to its centre within half a stratum, 0.5 / n
 // on either axis (the fake evaluator's camera sample is worth its position (u0, u1); a rotation by r moves
-// the mean by r less the points it wraps over the edge, over spp), where hashed points leave each pixel's
-// mean off by ~0.29 / sqrt(spp);
-// and each point is uniform on its own, so the first half of the samples (one unit of two) is still
-// unbiased over the film.
+// the mean by r less the points it wraps over the edge, over n), where hashed points leave each pixel's
+// mean off by ~0.29 / sqrt(n); a pixel of multiplicity m gets n = m spp of them. Each point is uniform on
+// its own, so the first half of the samples (one unit of two) is still unbiased over the film.
 TEST(JobApi, StratifiedPixelPointsCoverEachPixelEvenly) {
   constexpr int kW = 20, kH = 15, kSpp = 16;
   RenderSettings s = settingsFor("pt", kSpp, kW, kH);
@@ -161,24 +160,37 @@ TEST(JobApi, StratifiedPixelPointsCoverEachPixelEvenly) {
   const JobPlan plan = planSampleJob(s);
   ASSERT_EQ(plan.units.size(), 2u);
   const FakeEvaluator eval(kW, kH);
+  PixelSampling sampling;
+  sampling.multiplicity.assign(size_t(kW) * kH, 1);
+  for (size_t i = 0; i < sampling.multiplicity.size(); i += 7) sampling.multiplicity[i] = 4;
   auto worst = [&](bool stratified) {
+    sampling.stratified = stratified;
     PartialResult all;
-    for (const WorkUnit& u : plan.units) all.add(runSampleUnit(eval, plan, u, nullptr, stratified));
-    double off = 0;
+    for (const WorkUnit& u : plan.units) all.add(runSampleUnit(eval, plan, u, nullptr, &sampling));
+    double off = 0;  // relative to half a stratum
     for (size_t i = 0; i < all.film.pixelCount(); ++i) {
-      EXPECT_EQ(all.film.pixelCounts()[i], double(kSpp));
-      for (double v : {all.film.pixelSums()[i].r, all.film.pixelSums()[i].g}) off = std::max(off, std::fabs(v / kSpp - 0.5));
+      const double n = double(kSpp) * sampling.multiplicity[i];
+      EXPECT_EQ(all.film.pixelCounts()[i], n) << i;
+      for (double v : {all.film.pixelSums()[i].r, all.film.pixelSums()[i].g})
+        off = std::max(off, std::fabs(v / n - 0.5) / (0.5 / n));
     }
     return off;
   };
-  EXPECT_LE(worst(true), 0.5 / kSpp + 1e-6);
-  EXPECT_GT(worst(false), 0.1);
-  // Half of the samples: unbiased over the film (300 pixels x 8 samples, each uniform: the mean of u0 has a
-  // standard error of 0.29 / sqrt(2400) = 0.006).
-  const PartialResult half = runSampleUnit(eval, plan, plan.units.front(), nullptr, true);
-  double sum = 0;
-  for (size_t i = 0; i < half.film.pixelCount(); ++i) sum += half.film.pixelSums()[i].r;
-  EXPECT_NEAR(sum / double(half.film.pixelCount() * (kSpp / 2)), 0.5, 4 * 0.006);
+  EXPECT_LE(worst(true), 1 + 1e-4);
+  EXPECT_GT(worst(false), 3.0);
+  // Half of the samples: unbiased over the film (300 pixels x 8 samples, more in some, each uniform: the
+  // mean of u0 has a standard error of at most 0.29 / sqrt(2400) = 0.006).
+  sampling.stratified = true;
+  const PartialResult half = runSampleUnit(eval, plan, plan.units.front(), nullptr, &sampling);
+  double sum = 0, count = 0;
+  for (size_t i = 0; i < half.film.pixelCount(); ++i) {
+    sum += half.film.pixelSums()[i].r;
+    count += half.film.pixelCounts()[i];
+  }
+  EXPECT_NEAR(sum / count, 0.5, 4 * 0.006);
+  // A multiplicity per pixel or none.
+  sampling.multiplicity.pop_back();
+  EXPECT_THROW(runSampleUnit(eval, plan, plan.units.front(), nullptr, &sampling), std::invalid_argument);
 }
 
 TEST(JobApi, SplatsAreNormalizedByPixelsOverLightPaths) {

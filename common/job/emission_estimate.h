@@ -27,7 +27,9 @@
 // it ~5x on the Cornell box). On the Cornell box at 256x256 this costs
 // ~3 rays per pixel, ~0.1 s of one thread. The chains still render length 1 (their visits follow the
 // brightness, which suits a light's outline better than pixel samples do); only the factor b_1 that
-// scales them comes from here.
+// scales them comes from here. Except where a light is small on the film (smallLightCells below): there
+// length 1's chains cannot share the light out among the lights, and --direct-light auto renders length 1
+// by a pass of its own (DirectLight::Emission, mlt_job.h), so this estimate is not made.
 #pragma once
 #include <cstdint>
 #include <vector>

@@ -72,7 +72,7 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
 }
 
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
-                            TechniqueFilms* techniques, bool stratifiedPixels) {
+                            TechniqueFilms* techniques, const PixelSampling* sampling) {
   const auto start = std::chrono::steady_clock::now();
   const RenderSettings& s = plan.settings;
   if (unit.sampleEnd <= unit.sampleBegin || unit.sampleEnd > uint32_t(s.spp))
@@ -80,6 +80,9 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
                                 std::to_string(unit.sampleBegin) + ", " + std::to_string(unit.sampleEnd) +
                                 ") is empty or beyond spp " + std::to_string(s.spp));
   const int width = s.width, height = s.height;
+  if (sampling && !sampling->multiplicity.empty() && sampling->multiplicity.size() != size_t(width) * size_t(height))
+    throw std::invalid_argument("sample unit: pixel multiplicities for " + std::to_string(sampling->multiplicity.size()) +
+                                " pixels on a " + std::to_string(width) + "x" + std::to_string(height) + " film");
   const bool lightTracing = evaluator.splatsOnly();  // lt: every splat goes to the splat sums
   PartialResult result;
   result.film = Film(width, height);
@@ -107,36 +110,42 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
           for (int x = x0; x < x1; ++x) {
             const uint64_t pixelIndex = uint64_t(y) * uint64_t(width) + uint64_t(x);
             const uint64_t key = hashKeys(s.seed, pixelIndex);
-            source.reset(key, k);
-            if (stratifiedPixels) source.setPixelPoint(stratifiedPixelPoint(key, k, uint32_t(s.spp)));
-            const Vec2 pixel{float(x), float(y)};
-            contribution.clear();
-            evaluator.evaluate(source, &pixel, contribution);
-            Color L;  // the camera sample: every t >= 2 (or pt's t < 0) strategy, summed
-            for (const Splat& sp : contribution.splats) {
-              if (lightTracing || sp.t == 1) out.splats.push_back({sp.pRaster, sp.L});
-              else L += sp.L;
-            }
-            if (techniques) {
-              std::fill(techniqueL.begin(), techniqueL.end(), Color());
+            const uint32_t m = sampling && !sampling->multiplicity.empty()
+                                   ? std::max<uint32_t>(1, sampling->multiplicity[pixelIndex]) : 1;
+            for (uint32_t r = 0; r < m; ++r) {
+              const uint64_t i = uint64_t(k) * m + r;  // m = 1: i = k, the sample as it always was
+              source.reset(key, i);
+              if (sampling && sampling->stratified)
+                source.setPixelPoint(stratifiedPixelPoint(key, uint32_t(i), uint32_t(s.spp) * m));
+              const Vec2 pixel{float(x), float(y)};
+              contribution.clear();
+              evaluator.evaluate(source, &pixel, contribution);
+              Color L;  // the camera sample: every t >= 2 (or pt's t < 0) strategy, summed
               for (const Splat& sp : contribution.splats) {
-                if (sp.s < 0 || sp.t < 1 || sp.s + sp.t - 1 > techniques->maxLength || !sp.L.isFinite()) continue;
-                const int ti = TechniqueFilms::index(sp.s, sp.t);
-                if (sp.t == 1) out.techniqueSplats.push_back({ti, {sp.pRaster, sp.L}});
-                else techniqueL[ti] += sp.L;
+                if (lightTracing || sp.t == 1) out.splats.push_back({sp.pRaster, sp.L});
+                else L += sp.L;
               }
-              if (!lightTracing)
-                for (size_t ti = 0; ti < techniqueL.size(); ++ti)
-                  techniques->films[ti].addSample(Vec2(float(x) + 0.5f, float(y) + 0.5f), techniqueL[ti]);
+              if (techniques) {
+                std::fill(techniqueL.begin(), techniqueL.end(), Color());
+                for (const Splat& sp : contribution.splats) {
+                  if (sp.s < 0 || sp.t < 1 || sp.s + sp.t - 1 > techniques->maxLength || !sp.L.isFinite()) continue;
+                  const int ti = TechniqueFilms::index(sp.s, sp.t);
+                  if (sp.t == 1) out.techniqueSplats.push_back({ti, {sp.pRaster, sp.L}});
+                  else techniqueL[ti] += sp.L;
+                }
+                if (!lightTracing)
+                  for (size_t ti = 0; ti < techniqueL.size(); ++ti)
+                    techniques->films[ti].addSample(Vec2(float(x) + 0.5f, float(y) + 0.5f), techniqueL[ti]);
+              }
+              if (lightTracing) continue;
+              if (!L.isFinite()) {
+                ++out.nonFinite;
+                continue;
+              }
+              // Binned at the pixel centre: the sample belongs to pixel (x, y) by construction, even when
+              // x + u rounds up to x + 1 in float. Only this tile's thread writes this pixel's entries.
+              film.addSample(Vec2(float(x) + 0.5f, float(y) + 0.5f), L);
             }
-            if (lightTracing) continue;
-            if (!L.isFinite()) {
-              ++out.nonFinite;
-              continue;
-            }
-            // Binned at the pixel centre: the sample belongs to pixel (x, y) by construction, even when
-            // x + u rounds up to x + 1 in float. Only this tile's thread writes this pixel's entries.
-            film.addSample(Vec2(float(x) + 0.5f, float(y) + 0.5f), L);
           }
         }
       });

@@ -44,12 +44,20 @@ struct TechniqueFilms {
   static int index(int s, int t) { const int L = s + t - 1; return (L - 1) * (L + 2) / 2 + s; }
   static int count(int maxLength) { return index(0, maxLength + 2); }  // first index of length maxLength+1
 };
-// stratifiedPixels: sample k of a pixel's spp lies at stratifiedPixelPoint(its pixel's key, k, spp) instead
-// of a hashed point (each point is still uniform on the pixel, so a pixel's mean of any set of its samples
-// stays unbiased; the spp of them cover it evenly). The pass of the lights seen directly takes it
-// (DirectLight::Emission): a light a pixel wide is an outline in every pixel it touches.
+// How the pass of the lights seen directly (DirectLight::Emission) samples its pixels: a light a pixel wide
+// is an outline in every pixel it touches, and a pixel it covers by a sliver is worth ~nothing in the
+// reference but a whole sample's radiance / n where one of n samples hits it.
+//  - stratified: pixel j's sample i of n lies at stratifiedPixelPoint(its key, i, n) instead of a hashed
+//    point. Each point is still uniform on the pixel, so a pixel's mean of any set of its samples stays
+//    unbiased; all n cover it evenly (the variance at an outline falls as ~n^-1.5 instead of n^-1).
+//  - multiplicity (per pixel, row-major; empty: 1 everywhere): m_j samples per sample index k, numbered
+//    i = k m_j + r (r < m_j) of n = spp m_j; the pixel's mean is its sum over its count, as always.
+struct PixelSampling {
+  bool stratified = false;
+  std::vector<uint8_t> multiplicity;
+};
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
-                            TechniqueFilms* techniques, bool stratifiedPixels = false);
+                            TechniqueFilms* techniques, const PixelSampling* sampling = nullptr);
 
 std::vector<Color> developSampleImage(const JobPlan& plan, const PartialResult& merged);
 
