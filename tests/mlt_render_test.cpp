@@ -106,7 +106,7 @@ TEST(MltRender, SeparateDirectAgreesWithBdpt) {
 // The lights seen directly by a pt pass at stratified pixel points, the chains from length 2 on
 // (DirectLight::Emission): the two together are the image bdpt renders.
 TEST(MltRender, EmissionPassAgreesWithBdpt) {
-  for (const char* m : {"mmlt", "rjmlt"}) {
+  for (const char* m : {"mmlt", "rjmlt", "pssmlt-bdpt"}) {
     RenderSettings s = cornellSettings(m);
     s.directLight = DirectLight::Emission;
     s.spp = 16;

@@ -60,7 +60,8 @@ std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings
 }
 
 double directSppPerMutation(const ChainJobSpec& spec, const RenderSettings& s, const DirectLightPilot* pilot) {
-  if (s.directLight == DirectLight::Emission) return kEmissionSppPerMutation;  // one ray a sample, whatever the method
+  // One ray a sample; per mmlt mutation, so that the pass takes the same share of the time whatever the method.
+  if (s.directLight == DirectLight::Emission) return spec.mutationCost() * kEmissionSppPerMutation;
   if (!pilot) return spec.mutationCost() * kDirectSppPerMutation;
   const double share = std::clamp(pilot->share, 0.0, 1.0);
   const double odds = share < 1 ? std::min(share / (1 - share), kDirectMaxShareOdds) : kDirectMaxShareOdds;
@@ -190,12 +191,14 @@ void validateMarkovChainSettings(const ChainJobSpec& spec, const RenderSettings&
 
 void validateSeparateDirect(const ChainJobSpec& spec, const RenderSettings& s) {
   if (!separatesDirect(s)) return;
+  if (s.directLight == DirectLight::Emission && !spec.allowsEmissionPass())
+    throw std::invalid_argument("settings: " + spec.name() + " cannot take direct light emission (a pass for the lights "
+                                "seen directly): " + (spec.allowsSeparateDirect()
+                                                          ? "its own light-view pass renders them; it takes chains or separate"
+                                                          : "its splats do not carry the path length; it takes chains"));
   if (!spec.allowsSeparateDirect())
     throw std::invalid_argument("settings: " + spec.name() +
                                 " cannot leave out the direct light (direct light separate): its splats do not carry the path length");
-  if (s.directLight == DirectLight::Emission && !spec.chainsPerLength())
-    throw std::invalid_argument("settings: direct light emission (a pass for the lights seen directly) needs chains per "
-                                "path length (mmlt, rjmlt); " + spec.name() + " takes chains or separate");
   if (s.spp < 0)
     throw std::invalid_argument("settings: the direct pass (direct light separate) needs spp >= 1 (or 0: sized by the "
                                 "mutations per pixel), got " + std::to_string(s.spp));
@@ -243,7 +246,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       DirectLight choice = p.separate ? DirectLight::Separate : DirectLight::Chains;
       // The lights seen directly by a pass where one is small on the film (kEmissionSppPerMutation: why).
       uint64_t smallLights = 0;
-      if (choice == DirectLight::Chains && spec.chainsPerLength()) {
+      if (choice == DirectLight::Chains && spec.allowsEmissionPass()) {
         const int G = emissionCellsPerPixelAxis(scene.camera().width(), scene.camera().height());
         smallLightCells(scene, G, &smallLights);
         if (smallLights > 0) choice = DirectLight::Emission;
@@ -428,7 +431,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
                  kDirectPassMethod, s.directLight == DirectLight::Emission ? " of the lights seen directly" : "",
                  s.spp, r,
                  s.directLight == DirectLight::Emission
-                     ? std::string("kEmissionSppPerMutation")
+                     ? fmt::format("kEmissionSppPerMutation; mutation cost {:g}", spec.mutationCost())
                      : fmt::format("{}; mutation cost {:g}",
                                    pilot ? fmt::format("the pilot's share {:.1f}% of the light", 100 * pilot->share)
                                          : std::string("no pilot"),

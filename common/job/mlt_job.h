@@ -33,6 +33,10 @@ class ChainJobSpec {
   virtual bool chainsPerLength() const = 0;
   // Whether the target can leave out paths of at most kDirectMaxSegments segments (separateDirect).
   virtual bool allowsSeparateDirect() const = 0;
+  // Whether a pass may render the lights seen directly instead (DirectLight::Emission: the target leaves
+  // out paths of one segment); the default, allowsSeparateDirect. veach-mlt: no, its light-view pass
+  // renders them already.
+  virtual bool allowsEmissionPass() const { return allowsSeparateDirect(); }
   // The target function; one per thread of the bootstrap and one per chain.
   virtual std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const = 0;
   // The chain's state over its Kelemen source; its proposals' kinds index mutationKinds().
@@ -165,8 +169,8 @@ inline constexpr const char* kDirectPassMethod = "pt";
 constexpr double kDirectSppPerShareOdds = 0.15;
 constexpr double kDirectMaxShareOdds = 19;
 constexpr double kDirectSppPerMutation = 0.5;
-// The lights seen directly by a pass of their own (DirectLight::Emission; mmlt and rjmlt, whose chains have
-// a length 1 to leave out). Chosen by the bootstrap (--direct-light auto) where the pilot keeps the direct
+// The lights seen directly by a pass of their own (DirectLight::Emission; mmlt, rjmlt and pssmlt-bdpt, whose
+// targets can leave out paths of one segment: ChainJobSpec::allowsEmissionPass). Chosen by the bootstrap (--direct-light auto) where the pilot keeps the direct
 // light in the chains and a light is small on the film (emission_estimate.h, smallLightCells: its points
 // land in at most kFootprintMaxCells cells). Why: length 1's chains hardly move from one light to another
 // (a large step from a light a pixel wide to a larger one is accepted in proportion to their radiances, and
@@ -184,8 +188,8 @@ constexpr double kDirectSppPerMutation = 0.5;
 // pixels. On glossy-plates the marks are ~200 of 65536 pixels: the pass costs ~5% more.
 constexpr double kEmissionSppPerMutation = 0.125;
 constexpr int kEmissionOutlineSamples = 16;
-// Samples of the pass per mutation per pixel (directSppFor): kEmissionSppPerMutation for Emission; for
-// Separate the rule above, from the pilot's share.
+// Samples of the pass per mutation per pixel (directSppFor): mutationCost x kEmissionSppPerMutation for
+// Emission; for Separate the rule above, from the pilot's share.
 double directSppPerMutation(const ChainJobSpec& spec, const RenderSettings& settings, const DirectLightPilot* pilot);
 int directSppFor(double sppPerMutation, double mutationsPerPixel);
 // The settings with the method's defaults filled in where they were left to it (largeStepProb < 0,

@@ -65,19 +65,19 @@ JobPlan planMarkovChainJob(const RenderScene& scene, const RenderSettings& s, co
   return planMarkovChainJob(spec(s), scene, s, boot);
 }
 
-EvaluatorPssTarget::EvaluatorPssTarget(std::unique_ptr<PathEvaluator> evaluator, bool separateDirect)
-    : evaluator_(std::move(evaluator)), separateDirect_(separateDirect) {}
+EvaluatorPssTarget::EvaluatorPssTarget(std::unique_ptr<PathEvaluator> evaluator, int directSegments)
+    : evaluator_(std::move(evaluator)), directSegments_(directSegments) {}
 EvaluatorPssTarget::~EvaluatorPssTarget() = default;
 
 void EvaluatorPssTarget::evaluate(SampleSource& source, int /*pathLength*/, PathContribution& out) {
   out.clear();
   evaluator_->evaluate(source, nullptr, out);
-  if (!separateDirect_) return;
+  if (directSegments_ <= 0) return;
   // A path of s + t vertices has s + t - 1 segments. Splats without (s, t) cannot be classified.
   for (const Splat& sp : out.splats)
     if (sp.s < 0 || sp.t < 0)
       throw std::logic_error("separateDirect: the path evaluator does not label its splats with (s, t)");
-  std::erase_if(out.splats, [](const Splat& sp) { return sp.s + sp.t - 1 <= kDirectMaxSegments; });
+  std::erase_if(out.splats, [this](const Splat& sp) { return sp.s + sp.t - 1 <= directSegments_; });
 }
 
 }  // namespace mlt

@@ -39,17 +39,17 @@ const PrimarySampleChainMethod* findPrimarySampleChainMethod(const std::string& 
 const ChainJobSpec* findChainJobSpec(const std::string& name);
 
 // The target of pssmlt and pssmlt-bdpt: a path evaluator on the chain's numbers (the film position from
-// the camera stream). separateDirect: paths of at most kDirectMaxSegments segments are dropped (rendered
-// by the direct pass instead); that needs splats labelled with (s, t).
+// the camera stream). directSegments > 0 (directPassSegments): paths of at most that many segments are
+// dropped (rendered by the direct pass instead); that needs splats labelled with (s, t).
 class EvaluatorPssTarget final : public PssTarget {
  public:
-  EvaluatorPssTarget(std::unique_ptr<PathEvaluator> evaluator, bool separateDirect);
+  EvaluatorPssTarget(std::unique_ptr<PathEvaluator> evaluator, int directSegments);
   ~EvaluatorPssTarget() override;
   void evaluate(SampleSource& source, int pathLength, PathContribution& out) override;
 
  private:
   std::unique_ptr<PathEvaluator> evaluator_;
-  bool separateDirect_;
+  int directSegments_;
 };
 
 // Convenience over the registry for tools and tests: the functions of mlt_job.h for settings.method.

@@ -35,7 +35,7 @@ enum class MltSplatting { MethodDefault, ExpectedValue, KelemenMIS };
 // How a chain method renders paths of at most two segments (the direct light): Auto, the plan decides
 // from a pilot (common/job/direct_light_rule.h) and holds the value used; Chains, the chains carry them
 // with the rest; Separate, a pt pass renders them (kDirectPassMethod) and the chains carry only longer paths;
-// Emission (mmlt, rjmlt), a pt pass renders the lights seen directly (paths of one segment) and the chains
+// Emission (mmlt, rjmlt, pssmlt-bdpt), a pt pass renders the lights seen directly (paths of one segment) and the chains
 // every longer path (mlt_job.h, kEmissionSppPerMutation: why).
 enum class DirectLight { Auto, Chains, Separate, Emission };
 

@@ -69,9 +69,9 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
                  "a large and smooth part of the image (docs/CHAINS.md); chains: the chains, with the rest; "
                  "separate: a pt pass (--spp samples; without --spp 0.15 s / (1 - s) per mutation per pixel, s the "
                  "pilot's share of the light in those paths, 4x that for pssmlt-bdpt, rounded up, as an automatic "
-                 "pass always is) and the chains only the longer ones (Veach's refinement); emission (mmlt, rjmlt; "
-                 "auto takes it where a light is small on the film): a pt pass of one segment (0.125 samples per "
-                 "mutation per pixel without --spp) renders the lights seen directly, the chains every longer path")
+                 "pass always is) and the chains only the longer ones (Veach's refinement); emission (mmlt, rjmlt, "
+                 "pssmlt-bdpt; auto takes it where a light is small on the film): a pt pass of one segment (0.125 "
+                 "samples per mutation per pixel without --spp, 4x that for pssmlt-bdpt) renders the lights seen directly, the chains every longer path")
           ->capture_default_str()
           ->check(CLI::IsMember({"auto", "chains", "separate", "emission"}));
   add_flag("--separate-direct", separateDirect_, "The same as --direct-light separate")->excludes(directLight);

@@ -5,7 +5,7 @@
 namespace mlt {
 
 std::unique_ptr<PssTarget> PssmltMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
-  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "pt", settings.integrator), separatesDirect(settings));
+  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "pt", settings.integrator), directPassSegments(settings));
 }
 
 }  // namespace mlt

@@ -5,7 +5,7 @@
 namespace mlt {
 
 std::unique_ptr<PssTarget> PssmltBdptMethod::makeTarget(const RenderScene& scene, const RenderSettings& settings) const {
-  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator), separatesDirect(settings));
+  return std::make_unique<EvaluatorPssTarget>(makeEvaluator(scene, "bdpt", settings.integrator), directPassSegments(settings));
 }
 
 }  // namespace mlt

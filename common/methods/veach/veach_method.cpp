@@ -110,7 +110,7 @@ std::unique_ptr<PssTarget> VeachMltMethod::makeTarget(const RenderScene& scene, 
   // With the light-view pass, also without the paths E S* L (light_view.h): c integrates the chains' f.
   const bool dropLightViews = mutationSettings(settings).lightView > 0;
   return std::make_unique<EvaluatorPssTarget>(std::make_unique<BdptEvaluator>(scene, settings.integrator, dropLightViews),
-                                              separatesDirect(settings));
+                                              directPassSegments(settings));
 }
 
 std::unique_ptr<ChainState> VeachMltMethod::makeState(KelemenSource&, const RenderSettings&) const {

@@ -36,6 +36,7 @@ class VeachMltMethod final : public RenderMethod, public ChainJobSpec {
   // ChainJobSpec (the bootstrap and chain allocation of pssmlt-bdpt).
   bool chainsPerLength() const override { return false; }
   bool allowsSeparateDirect() const override { return true; }  // veach_job.h
+  bool allowsEmissionPass() const override { return false; }     // its light-view pass renders those paths
   // No large steps (b's samples are separate candidates, veach_job.h): expected values only.
   MltSplatting defaultSplatting() const override { return MltSplatting::ExpectedValue; }
   bool supportsKelemenMis() const override { return false; }
