@@ -84,10 +84,10 @@ Mean iidMean(uint64_t n, F f) {
 }
 
 // b_1 by plain Monte Carlo: uniform camera rays over the film, pt limited to one segment.
-Mean plainEmission(uint64_t n, uint64_t seed) {
+Mean plainEmission(uint64_t n, uint64_t seed, const RenderScene& scene = cornell()) {
   IntegratorSettings one;
   one.maxDepth = 1;
-  const std::unique_ptr<PathEvaluator> pt = makeEvaluator(cornell(), "pt", one);
+  const std::unique_ptr<PathEvaluator> pt = makeEvaluator(scene, "pt", one);
   PathContribution path;
   return iidMean(n, [&](uint64_t i) {
     IndependentSource source(seed, i);
@@ -95,6 +95,28 @@ Mean plainEmission(uint64_t n, uint64_t seed) {
     pt->evaluate(source, nullptr, path);
     return targetFunction(path);
   });
+}
+
+// The estimate over seeds 1..n: the mean of b_1, its spread (sample standard deviation) and the rms of the
+// stated standard errors; check(e, seed) sees every estimate.
+struct OverSeeds {
+  double mean = 0, spread = 0, statedSe = 0;
+};
+template <typename Estimate, typename Check>
+OverSeeds overSeeds(int n, Estimate estimate, Check check) {
+  double sum = 0, sumSq = 0, stated = 0;
+  for (int seed = 1; seed <= n; ++seed) {
+    const EmissionEstimate e = estimate(uint64_t(seed));
+    check(e, seed);
+    sum += e.estimate.b;
+    sumSq += e.estimate.b * e.estimate.b;
+    stated += e.estimate.stdErr * e.estimate.stdErr;
+  }
+  OverSeeds o;
+  o.mean = sum / n;
+  o.spread = std::sqrt(std::max(0.0, (sumSq - n * o.mean * o.mean) / (n - 1)));
+  o.statedSe = std::sqrt(stated / n);
+  return o;
 }
 
 TEST(EmissionEstimate, EstimatesWhatTheChainsTargetOfLengthOneIntegratesTo) {
@@ -119,16 +141,9 @@ TEST(EmissionEstimate, EstimatesWhatTheChainsTargetOfLengthOneIntegratesTo) {
 TEST(EmissionEstimate, UnbiasedWithTheStatedStandardError) {
   const Mean reference = plainEmission(2000000, 5);
   constexpr int kSeeds = 40;
-  double sum = 0, sumSq = 0, stated = 0;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
-    const EmissionEstimate e = emissionEstimate(cornell(), settings("mmlt", uint64_t(seed)));
-    sum += e.estimate.b;
-    sumSq += e.estimate.b * e.estimate.b;
-    stated += e.estimate.stdErr * e.estimate.stdErr;
-  }
-  const double mean = sum / kSeeds;
-  const double spread = std::sqrt(std::max(0.0, (sumSq - kSeeds * mean * mean) / (kSeeds - 1)));
-  const double statedSe = std::sqrt(stated / kSeeds);
+  const auto [mean, spread, statedSe] = overSeeds(
+      kSeeds, [](uint64_t seed) { return emissionEstimate(cornell(), settings("mmlt", seed)); },
+      [](const EmissionEstimate&, int) {});
   // Unbiased: the mean of 40 runs within 4 standard errors of the plain estimate.
   EXPECT_NEAR(mean, reference.mean, 4 * std::hypot(reference.stdErr, spread / std::sqrt(double(kSeeds))))
       << "plain " << reference.mean << " +- " << reference.stdErr;
@@ -230,33 +245,18 @@ TEST(EmissionEstimate, SmallBrightLightsAreFoundByTheirGeometry) {
   EXPECT_EQ(std::count(boxMarks.begin(), boxMarks.end(), uint8_t(1)), 0);
 
   // Plain rays over the film: b_1 = E[c_1] (E1), whatever the image of the small spheres.
-  IntegratorSettings one;
-  one.maxDepth = 1;
-  const std::unique_ptr<PathEvaluator> pt = makeEvaluator(*plates, "pt", one);
-  PathContribution path;
-  const Mean plain = iidMean(4000000, [&](uint64_t i) {
-    IndependentSource source(91, i);
-    path.clear();
-    pt->evaluate(source, nullptr, path);
-    return targetFunction(path);
-  });
+  const Mean plain = plainEmission(4000000, 91, *plates);
   ASSERT_LT(plain.stdErr / plain.mean, 0.05) << "the check must be able to fail";
 
   constexpr int kSeeds = 16;
-  double sum = 0, sumSq = 0, stated = 0;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
-    const EmissionEstimate e = emissionEstimate(*plates, squareSettings(uint64_t(seed), 64));
-    ASSERT_TRUE(e.estimated) << seed;
-    EXPECT_EQ(e.smallLights, 3u) << seed;
-    EXPECT_GE(e.edgeCells, marked) << seed << ": every marked cell gets the outline's rays";
-    EXPECT_LT(e.maxCellShare, kEmissionMaxCellShare) << seed;
-    sum += e.estimate.b;
-    sumSq += e.estimate.b * e.estimate.b;
-    stated += e.estimate.stdErr * e.estimate.stdErr;
-  }
-  const double mean = sum / kSeeds;
-  const double spread = std::sqrt(std::max(0.0, (sumSq - kSeeds * mean * mean) / (kSeeds - 1)));
-  const double statedSe = std::sqrt(stated / kSeeds);
+  const auto [mean, spread, statedSe] = overSeeds(
+      kSeeds, [&](uint64_t seed) { return emissionEstimate(*plates, squareSettings(seed, 64)); },
+      [&](const EmissionEstimate& e, int seed) {
+        EXPECT_TRUE(e.estimated) << seed;
+        EXPECT_EQ(e.smallLights, 3u) << seed;
+        EXPECT_GE(e.edgeCells, marked) << seed << ": every marked cell gets the outline's rays";
+        EXPECT_LT(e.maxCellShare, kEmissionMaxCellShare) << seed;
+      });
   EXPECT_NEAR(mean, plain.mean, 4 * std::hypot(plain.stdErr, spread / std::sqrt(double(kSeeds))))
       << "plain " << plain.mean << " +- " << plain.stdErr;
   // 16 runs pin the spread to +-18% (1 sigma): 3 sigma either way.
@@ -264,7 +264,8 @@ TEST(EmissionEstimate, SmallBrightLightsAreFoundByTheirGeometry) {
   EXPECT_LT(statedSe, 2.2 * spread) << "spread " << spread << " stated " << statedSe;
   EXPECT_LT(spread / mean, 0.01) << "spread " << spread << " of " << mean;
 
-  // mmlt takes it: b_1 is the rays', its candidates only seed chains.
+  // mmlt with its length 1 in the chains (--direct-light chains, as these settings ask) takes it: b_1 is the
+  // rays' (its candidates, beside a small light, grow as their variance asks: they place the chains).
   const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
   ASSERT_TRUE(mmlt);
   const RenderSettings s = squareSettings(2, 64);
