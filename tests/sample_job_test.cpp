@@ -188,6 +188,7 @@ TEST(JobApi, StratifiedPixelPointsCoverEachPixelEvenly) {
     count += half.film.pixelCounts()[i];
   }
   EXPECT_NEAR(sum / count, 0.5, 4 * 0.006);
+  EXPECT_EQ(double(half.samples), count) << "the samples taken, multiplicities included";
   // A multiplicity per pixel or none.
   sampling.multiplicity.pop_back();
   EXPECT_THROW(runSampleUnit(eval, plan, plan.units.front(), nullptr, &sampling), std::invalid_argument);

@@ -162,7 +162,13 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
   // adding units one by one (in-process) or task by task (the farm) gives the same bits. Pixel counts
   // are small integers and already exact. The technique films are never merged across processes.
   quantizeFilm(film, s.seed, unit.index);
-  result.samples = uint64_t(unit.sampleEnd - unit.sampleBegin) * film.pixelCount();
+  // Camera samples taken (light paths, for lt's P / N): the sample indices times each pixel's multiplicity.
+  uint64_t perIndex = film.pixelCount();
+  if (sampling && !sampling->multiplicity.empty()) {
+    perIndex = 0;
+    for (uint8_t m : sampling->multiplicity) perIndex += std::max<uint32_t>(1, m);
+  }
+  result.samples = uint64_t(unit.sampleEnd - unit.sampleBegin) * perIndex;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
