@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "common/farm/farm_types.h"
+#include "common/job/mlt_job.h"
 #include "common/mlt/develop.h"
 #include "proto/convert.h"
 
@@ -85,11 +86,12 @@ void checkTaskResult(const JobPlan& plan, uint32_t task, TaskRange range, const 
   for (uint32_t u = range.begin; u < range.end; ++u) expect.push_back(u);
   if (r.units != expect)
     refuse("partial.units", fmt::format("task {} must hold units {}-{}", task, range.begin, range.end - 1));
-  uint64_t samples = 0, pixelSamples = 0;  // mutations or pixel samples; pixel samples each pixel takes
+  uint64_t samples = 0, pixelSamples = 0;  // mutations or pixel samples; pixel samples a pixel takes at most
   for (uint32_t u = range.begin; u < range.end; ++u) {
     const WorkUnit& unit = plan.units[u];
     samples += unitWork(plan, unit);
-    if (unit.sampleEnd > unit.sampleBegin) pixelSamples += uint64_t(unit.sampleEnd - unit.sampleBegin);
+    if (unit.sampleEnd > unit.sampleBegin)  // the pass of the lights seen directly takes more in some pixels
+      pixelSamples += uint64_t(unit.sampleEnd - unit.sampleBegin) * uint64_t(directPassMultiplicity(plan.settings));
   }
   if (r.samples != samples)
     refuse("partial.samples", fmt::format("{}, but units {}-{} make {}", r.samples, range.begin, range.end - 1, samples));

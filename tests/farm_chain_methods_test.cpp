@@ -188,5 +188,19 @@ TEST(FarmChainMethods, VeachMltWithSeparateDirectOnTwoWorkersMatchesTheInProcess
   EXPECT_GT(r.local.plan.units.size(), size_t(r.local.plan.settings.chains)) << "no direct-pass units";
 }
 
+// The lights seen directly by a pass of their own (--direct-light auto's choice on glossy-plates, whose
+// spheres are small on the film): its stratified, multiplied pixel samples run on the workers as the
+// direct pass's batches, and the image is the in-process one, bit for bit, its metadata naming the choice.
+TEST(FarmChainMethods, MmltWithTheEmissionPassOnTwoWorkersMatchesTheInProcessRender) {
+  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/glossy-plates.xml",
+                                    "--method mmlt --seed 7 --width 64 --height 64 --mutations-per-pixel 8 --chains 24 "
+                                    "--bootstrap 4000",
+                                    "mmlt-emission");
+  expectSameImageAndStatistics(r, "mmlt");
+  EXPECT_EQ(text(r.farm, "directLight"), "emission");
+  EXPECT_EQ(number(r.farm, "separateDirect"), 0.0);
+  EXPECT_GT(r.local.plan.units.size(), size_t(r.local.plan.settings.chains)) << "no units of the pass";
+}
+
 }  // namespace
 }  // namespace mlt::farm::test

@@ -188,6 +188,11 @@ constexpr double kDirectSppPerMutation = 0.5;
 // pixels. On glossy-plates the marks are ~200 of 65536 pixels: the pass costs ~5% more.
 constexpr double kEmissionSppPerMutation = 0.125;
 constexpr int kEmissionOutlineSamples = 16;
+// The most samples a pixel of the direct pass takes per sample index: kEmissionOutlineSamples for
+// Emission, else 1 (what a coordinator checks a partial film's pixel counts against).
+inline int directPassMultiplicity(const RenderSettings& s) {
+  return s.directLight == DirectLight::Emission ? kEmissionOutlineSamples : 1;
+}
 // Samples of the pass per mutation per pixel (directSppFor): mutationCost x kEmissionSppPerMutation for
 // Emission; for Separate the rule above, from the pilot's share.
 double directSppPerMutation(const ChainJobSpec& spec, const RenderSettings& settings, const DirectLightPilot* pilot);
