@@ -277,6 +277,44 @@ TEST(EmissionEstimate, SmallBrightLightsAreFoundByTheirGeometry) {
   EXPECT_EQ(l1.estimate, e.estimate);
 }
 
+// A scene of many lights draws fewer footprint points per light (kFootprintPointBudget in all), and its
+// small lights still mark their cells: glossy-plates with 100 copies of its smallest sphere behind the
+// camera (lights that never reach the film but share the budget: 50^2 points each instead of 64^2).
+TEST(EmissionEstimate, ManyLightsShareThePointBudgetAndSmallOnesStillMark) {
+  SceneDesc desc = loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/glossy-plates.xml");
+  desc.camera.width = desc.camera.height = 64;
+  const std::unique_ptr<RenderScene> four = RenderScene::build(desc);
+  size_t smallest = desc.meshes.size();
+  float smallestExtent = 0;
+  for (size_t m = 0; m < desc.meshes.size(); ++m) {
+    if (!desc.meshes[m].emission) continue;
+    float lo = desc.meshes[m].positions[0].x, hi = lo;
+    for (const Vec3& p : desc.meshes[m].positions) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
+    if (smallest == desc.meshes.size() || hi - lo < smallestExtent) smallest = m, smallestExtent = hi - lo;
+  }
+  ASSERT_LT(smallest, desc.meshes.size());
+  for (int c = 0; c < 100; ++c) {
+    MeshDesc copy = desc.meshes[smallest];
+    for (Vec3& p : copy.positions) p = p + Vec3(float(c % 10), float(c / 10), 40.0f);  // behind the camera (z = 15)
+    desc.meshes.push_back(std::move(copy));
+  }
+  const std::unique_ptr<RenderScene> many = RenderScene::build(desc);
+  EXPECT_EQ(footprintPointsPerSide(*four), 64);
+  EXPECT_EQ(footprintPointsPerSide(*many), 50);  // floor(sqrt(2^18 / 104))
+  uint64_t fourLights = 0, manyLights = 0;
+  const std::vector<uint8_t> a = smallLightCells(*four, 4, &fourLights), b = smallLightCells(*many, 4, &manyLights);
+  EXPECT_EQ(fourLights, 3u);
+  EXPECT_EQ(manyLights, 3u) << "the copies never reach the film";
+  uint64_t both = 0, onlyA = 0, onlyB = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    both += a[i] && b[i];
+    onlyA += a[i] && !b[i];
+    onlyB += b[i] && !a[i];
+  }
+  EXPECT_GT(both, 0u);
+  EXPECT_LE(onlyA + onlyB, both / 10) << "both " << both << ", only with 4096 points " << onlyA << ", only with fewer " << onlyB;
+}
+
 // A --time budget bootstraps twice (a probe, then the size that fits): the second takes the first's
 // camera rays instead of tracing them again, and is the same bootstrap, bit for bit, as one without it
 // (the rays still count against its budget, so --bootstrap with the resolved size reproduces it). Rays of

@@ -53,20 +53,32 @@ int emissionCellsPerPixelAxis(int width, int height) {
   return int(std::max(1.0, std::ceil(std::sqrt(double(kEmissionMinCells) / P))));
 }
 
+namespace {
+bool seenOnFilm(const Light& light) {  // area lights; the others are never seen on the film
+  return !(light.deltaPosition() || light.infinite() || light.power().isBlack());
+}
+}  // namespace
+
+int footprintPointsPerSide(const RenderScene& scene) {
+  uint64_t areaLights = 0;
+  for (const std::unique_ptr<Light>& light : scene.lights()) areaLights += seenOnFilm(*light) ? 1 : 0;
+  const double perLight = areaLights > 0 ? double(kFootprintPointBudget) / double(areaLights) : 0.0;
+  return int(std::clamp(std::floor(std::sqrt(std::min(perLight, double(kFootprintPoints)))), 8.0, 64.0));
+}
+
 std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* lights) {
   const Camera& camera = scene.camera();
   const int X = camera.width() * G, Y = camera.height() * G;
   std::vector<uint8_t> marked(size_t(X) * size_t(Y), 0);
   if (lights) *lights = 0;
-  constexpr int kSide = 64;  // kFootprintPoints = kSide^2, stratified over sampleLe's uPos
-  static_assert(kSide * kSide == int(kFootprintPoints));
+  const int side = footprintPointsPerSide(scene);  // side^2 points per light, stratified over sampleLe's uPos
   std::vector<uint64_t> cells;
   for (const std::unique_ptr<Light>& light : scene.lights()) {
-    if (light->deltaPosition() || light->infinite() || light->power().isBlack()) continue;  // never seen on the film
+    if (!seenOnFilm(*light)) continue;
     cells.clear();
     bool small = true;
-    for (int i = 0; i < kSide * kSide && small; ++i) {
-      const Vec2 uPos{(float(i % kSide) + 0.5f) / kSide, (float(i / kSide) + 0.5f) / kSide};
+    for (int i = 0; i < side * side && small; ++i) {
+      const Vec2 uPos{(float(i % side) + 0.5f) / float(side), (float(i / side) + 0.5f) / float(side)};
       const std::optional<LightLeSample> le = light->sampleLe(uPos, Vec2{0.5f, 0.5f});
       if (!le) continue;
       const std::optional<Vec2> r = camera.rasterPosition(le->ray.o);

@@ -63,7 +63,10 @@ constexpr uint64_t kEmissionMinCells = uint64_t(1) << 16;
 // bootstrap keeps the candidates' b_1 (mlt_job.cpp); a uniform light of N cells holds 1/N per cell (the
 // Cornell box's: 0.3%). The choice reads the pilot and the geometry only, which are independent of both
 // estimates, so whichever is chosen stays unbiased.
+// A scene of many lights gets fewer points per light (at least 64), kFootprintPointBudget in all: the
+// marks are drawn by the bootstrap and by every unit of the emission pass (mlt_job.cpp).
 constexpr uint32_t kFootprintPoints = 4096;
+constexpr uint64_t kFootprintPointBudget = uint64_t(1) << 18;
 constexpr uint64_t kFootprintMaxCells = 256;
 constexpr double kEmissionMaxCellShare = 0.01;
 // What one of these camera rays costs in the bootstrap's unit (numbers drawn by a candidate, bootstrap.h
@@ -86,6 +89,9 @@ struct EmissionEstimate {
 
 // G, the cells per pixel axis of a width x height film: at least kEmissionMinCells cells in all.
 int emissionCellsPerPixelAxis(int width, int height);
+// The points per light of the footprints, per side of their square of uPos: sqrt(kFootprintPoints) = 64,
+// fewer where the scene's area lights would draw more than kFootprintPointBudget points in all (at least 8).
+int footprintPointsPerSide(const RenderScene& scene);
 // The cells (G x G per pixel, row-major) marked by small lights' footprints, 1 = marked; *lights: how many
 // lights marked some.
 std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* lights = nullptr);
