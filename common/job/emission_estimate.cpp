@@ -63,7 +63,7 @@ int footprintPointsPerSide(const RenderScene& scene) {
   uint64_t areaLights = 0;
   for (const std::unique_ptr<Light>& light : scene.lights()) areaLights += seenOnFilm(*light) ? 1 : 0;
   const double perLight = areaLights > 0 ? double(kFootprintPointBudget) / double(areaLights) : 0.0;
-  return int(std::clamp(std::floor(std::sqrt(std::min(perLight, double(kFootprintPoints)))), 8.0, 64.0));
+  return int(std::max(8.0, std::floor(std::sqrt(std::min(perLight, double(kFootprintPoints))))));
 }
 
 std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* lights) {

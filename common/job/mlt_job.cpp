@@ -529,12 +529,14 @@ PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const
   const JobPlan d = directPlan(plan);
   const auto evaluator = makeEvaluator(scene, d.settings.method, d.settings.integrator);
   // t = 1 splats in layer 0, developed with P / N. The lights seen directly: stratified pixel points, and
-  // kEmissionOutlineSamples times the samples in the pixels a small light's footprint marks.
+  // directPassMultiplicity (what the coordinator checks the counts against) times the samples in the
+  // pixels a small light's footprint marks.
   PixelSampling sampling;
   if (plan.settings.directLight == DirectLight::Emission) {
     sampling.stratified = true;
     sampling.multiplicity = smallLightCells(scene, 1);
-    for (uint8_t& m : sampling.multiplicity) m = m ? uint8_t(kEmissionOutlineSamples) : uint8_t(1);
+    const uint8_t outline = uint8_t(directPassMultiplicity(plan.settings));
+    for (uint8_t& m : sampling.multiplicity) m = m ? outline : uint8_t(1);
   }
   PartialResult r = runSampleUnit(*evaluator, d, unit, nullptr, &sampling);
   r.samples = 0;  // samples count mutations in a Markov chain job

@@ -275,8 +275,9 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
                                   : std::string("as asked");
     out += r.settings.directLight == DirectLight::Emission
                ? fmt::format("direct light (paths of at most {} segments): the lights seen directly by a {} pass of {} "
-                             "samples per pixel, one bounce in the chains ({}; a small light on the film)\n",
-                             kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
+                             "samples per pixel, one bounce in the chains ({})\n",
+                             kDirectMaxSegments, kDirectPassMethod, r.settings.spp,
+                             r.directShare >= 0 ? pilot + "; a small light on the film" : pilot)
            : separatesDirect(r.settings)
                ? fmt::format("direct light (paths of at most {} segments): a {} pass of {} samples per pixel ({})\n",
                              kDirectMaxSegments, kDirectPassMethod, r.settings.spp, pilot)
