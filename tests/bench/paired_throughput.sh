@@ -15,7 +15,8 @@ opts=("$@")
 root=$(cd "$(dirname "$0")/../.." && pwd)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-rate() { sed -n 's/.*= \([0-9.e+]*\) \(mutations\|samples\)\/s$/\1/p' "$1" | tail -1; }
+# The chains' summary ("= R mutations/s") or a sample job's ("(R samples/s)").
+rate() { sed -n 's/.*= \([0-9.e+]*\) \(mutations\|samples\)\/s$/\1/p; s/.*(\([0-9.e+]*\) samples\/s).*/\1/p' "$1" | tail -1; }
 ratios=()
 for i in $(seq 1 "$rounds"); do
   for swap in 0 1; do
