@@ -16,9 +16,12 @@
 #     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048,textured-serialized=2048
 #     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's
 #     error, where it is met)
+#   REF_METHODS=scene=method,... (a scene's reference method instead of REF_METHOD=bdpt; the page of
+#     2026-12-05 from session 40 on: REF_METHODS=caustic-mirror=pt with REF_SPPS' caustic-mirror=25600:
+#     on that scene pt's error per second is half bdpt's, see docs/RESULTS.md)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
-# The references (bdpt, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
+# The references (REF_METHOD, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
 # the scene's content hash and the settings, so a second regeneration skips them. Two instances with
 # disjoint SCENES (and CPU=0 / CPU=1) can run side by side; run one more with PAGE_ONLY=1 at the end.
 set -euo pipefail
@@ -34,13 +37,17 @@ RES=${RES:-256}
 THREADS=${THREADS:-1}
 REF_SPP=${REF_SPP:-2048}
 REF_SPPS=${REF_SPPS:-}
-ref_spp() {  # scene -> its reference size: REF_SPPS's entry, else REF_SPP
+REF_METHOD=${REF_METHOD:-bdpt}
+REF_METHODS=${REF_METHODS:-}
+scene_entry() {  # scene list default -> the scene's entry of a scene=value list, else default
   local entry
-  for entry in ${REF_SPPS//,/ }; do
+  for entry in ${2//,/ }; do
     if [[ "${entry%%=*}" == "$1" ]]; then echo "${entry#*=}"; return; fi
   done
-  echo "$REF_SPP"
+  echo "$3"
 }
+ref_spp() { scene_entry "$1" "$REF_SPPS" "$REF_SPP"; }             # scene -> its reference size
+ref_method() { scene_entry "$1" "$REF_METHODS" "$REF_METHOD"; }    # scene -> its reference method
 BUILD=${BUILD:-build}
 WORK=${WORK:-$BUILD/results-work}
 PIN=()
@@ -60,7 +67,7 @@ if [[ "${PAGE_ONLY:-0}" != "1" ]]; then
     if [[ -z "$file" ]]; then echo "make-results.sh: no scenes/$1.xml or scenes/$1.pbrt" >&2; exit 2; fi
     echo "== $1 $2: $3 at $4 s ($(date -u +%H:%M:%S))"
     "${PIN[@]}" "$BUILD/tools/mltfarm" eval --scenes "$file" --methods "$3" --runs "$RUNS" \
-      --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$(ref_spp "$1")" \
+      --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$(ref_spp "$1")" --ref-method "$(ref_method "$1")" \
       --no-maps --no-charts -q --out "$out"
   }
   for scene in ${SCENES//,/ }; do
@@ -78,7 +85,7 @@ fi
   echo "included, fits the budget; the charts plot the real wall time); ${RUNS} runs with different job seeds"
   echo "per point; every method at ${BUDGETS} s, the leading methods of some scenes also at ${LONG_BUDGETS} s (each"
   echo "scene's table shows which)."${NOTE:+ $NOTE}
-  echo "References: bdpt in 4 independent parts (their spread gives the reference's own noise floor and"
+  echo "References: ${REF_METHOD}${REF_METHODS:+ (per scene: ${REF_METHODS})} in 4 independent parts (their spread gives the reference's own noise floor and"
   echo "brightness error, reported per scene). relMSE = mean over pixels and channels of"
   echo "(x - r)^2 / (r^2 + 0.01); brightness = relative error of the image mean. Raw data:"
   echo "[runs.csv](results/runs.csv), [acceptance.csv](results/acceptance.csv), [refs.csv](results/refs.csv)."
