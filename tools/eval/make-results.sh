@@ -12,6 +12,8 @@
 #   BUDGETS=4,16  LONG_SCENES=cornell-box,caustic-mirror  LONG_METHODS=pt,bdpt,mmlt,pssmlt  LONG_BUDGETS=64
 #   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
+#   CPUS=a,b (instead of CPU: every method on both cores, two passes with the cores swapped, so that each
+#     point has 2 x RUNS runs, RUNS seeds on each core; what the page of 2026-12-05 did for glossy-plates)
 #   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
 #     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048,textured-serialized=2048
 #     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's
@@ -57,22 +59,52 @@ if [[ "${PAGE_ONLY:-0}" != "1" ]]; then
   cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
   cmake --build "$BUILD" --target mltfarm -j"$(nproc)"
   mkdir -p "$WORK/refs"
-  run_eval() {  # scene phase methods budgets
-    local out="$WORK/$1-$2"
+  scene_file() {  # scene -> its file under scenes/
+    local f
+    for f in scenes/"$1".xml scenes/"$1".pbrt; do [[ -f "$f" ]] && echo "$f" && return; done
+    echo "make-results.sh: no scenes/$1.xml or scenes/$1.pbrt" >&2
+    exit 2
+  }
+  run_eval() {  # scene phase methods budgets [cpu]: into $WORK/<scene>-<phase>
+    local out="$WORK/$1-$2" file pin=("${PIN[@]}")
+    file=$(scene_file "$1")
+    [[ -n "${5:-}" ]] && pin=(taskset -c "$5")
     rm -rf "$out"
     mkdir -p "$out"
     ln -s "$(realpath "$WORK/refs")" "$out/refs"
-    local file=""
-    for f in scenes/"$1".xml scenes/"$1".pbrt; do [[ -f "$f" ]] && file=$f && break; done
-    if [[ -z "$file" ]]; then echo "make-results.sh: no scenes/$1.xml or scenes/$1.pbrt" >&2; exit 2; fi
-    echo "== $1 $2: $3 at $4 s ($(date -u +%H:%M:%S))"
-    "${PIN[@]}" "$BUILD/tools/mltfarm" eval --scenes "$file" --methods "$3" --runs "$RUNS" \
+    echo "== $1 $2: $3 at $4 s${5:+ on CPU $5} ($(date -u +%H:%M:%S))"
+    "${pin[@]}" "$BUILD/tools/mltfarm" eval --scenes "$file" --methods "$3" --runs "$RUNS" \
       --budgets "$4" --width "$RES" --height "$RES" --threads "$THREADS" --ref-spp "$(ref_spp "$1")" --ref-method "$(ref_method "$1")" \
       --no-maps --no-charts -q --out "$out"
   }
+  # CPUS=a,b: the scene's methods in two halves, each half on each core in turn (two passes, the cores
+  # swapped), so that every method's runs come from both cores: this host's cores ran up to ~25% apart
+  # within an hour (docs/RESULTS.md, glossy-plates), enough to move one method's equal-time rows against
+  # another's. The reference is built first, on both cores, so that the two halves do not both build it.
+  run_phase() {  # scene phase methods budgets
+    if [[ -z "${CPUS:-}" ]]; then run_eval "$@"; return; fi
+    local a=${CPUS%%,*} b=${CPUS#*,} m half1="" half2="" i=0
+    for m in ${3//,/ }; do
+      if (( i % 2 == 0 )); then half1+="${half1:+,}$m"; else half2+="${half2:+,}$m"; fi
+      i=$((i + 1))
+    done
+    local refdir="$WORK/$1-refbuild"
+    rm -rf "$refdir"; mkdir -p "$refdir"; ln -s "$(realpath "$WORK/refs")" "$refdir/refs"
+    "$BUILD/tools/mltfarm" eval --scenes "$(scene_file "$1")" --methods pt --runs 1 --budgets 1 --width "$RES" \
+      --height "$RES" --threads 2 --ref-spp "$(ref_spp "$1")" --ref-method "$(ref_method "$1")" --no-maps \
+      --no-charts -q --out "$refdir" > /dev/null
+    local pass first second pids
+    for pass in 1 2; do
+      if (( pass == 1 )); then first=$a second=$b; else first=$b second=$a; fi
+      pids=()
+      run_eval "$1" "$2-${pass}a" "$half1" "$4" "$first" & pids+=($!)
+      if [[ -n "$half2" ]]; then run_eval "$1" "$2-${pass}b" "$half2" "$4" "$second" & pids+=($!); fi
+      for pid in "${pids[@]}"; do wait "$pid"; done  # a failed half stops the script (set -e)
+    done
+  }
   for scene in ${SCENES//,/ }; do
-    run_eval "$scene" short "$METHODS" "$BUDGETS"
-    if [[ ",$LONG_SCENES," == *",$scene,"* ]]; then run_eval "$scene" long "$LONG_METHODS" "$LONG_BUDGETS"; fi
+    run_phase "$scene" short "$METHODS" "$BUDGETS"
+    if [[ ",$LONG_SCENES," == *",$scene,"* ]]; then run_phase "$scene" long "$LONG_METHODS" "$LONG_BUDGETS"; fi
   done
 fi
 
@@ -94,4 +126,4 @@ fi
 mkdir -p docs/results
 rm -rf docs/results/*.png docs/results/*.csv docs/results/maps docs/results/summary.md
 /usr/bin/python3 tools/eval/results_page.py --out docs/results --page docs/RESULTS.md --header "$WORK/header.md" \
-  $(ls -d "$WORK"/*-short "$WORK"/*-long 2>/dev/null)
+  $(ls -d "$WORK"/*-short "$WORK"/*-short-?? "$WORK"/*-long "$WORK"/*-long-?? 2>/dev/null)
