@@ -13,7 +13,8 @@
 #   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
 #   CPUS=a,b (instead of CPU: every method on both cores, two passes with the cores swapped, so that each
-#     point has 2 x RUNS runs, RUNS seeds on each core; what the page of 2026-12-05 did for glossy-plates)
+#     point has 2 x RUNS runs, RUNS seeds on each core; the page of 2026-12-05 has glossy-plates and the
+#     Cornell box's 4- and 16-s rows so)
 #   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
 #     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048,textured-serialized=2048
 #     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's
@@ -23,7 +24,7 @@
 #     on that scene pt's error per second is half bdpt's, see docs/RESULTS.md)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
-# The references (REF_METHOD, REF_SPP spp in 4 independent parts, 1 thread) are cached in $WORK/refs, keyed by
+# The references (REF_METHOD, REF_SPP spp in 4 independent parts, THREADS threads; 2 with CPUS) are cached in $WORK/refs, keyed by
 # the scene's content hash and the settings, so a second regeneration skips them. Two instances with
 # disjoint SCENES (and CPU=0 / CPU=1) can run side by side; run one more with PAGE_ONLY=1 at the end.
 set -euo pipefail
@@ -115,7 +116,7 @@ fi
   echo "(settings and the exact \`mltfarm eval\` calls: the script's header). Film ${RES}x${RES}; ${THREADS} thread(s) per run"
   echo "${CPU:+pinned to one core }(equal time: each run's work is calibrated so that the whole job, bootstrap"
   echo "included, fits the budget; the charts plot the real wall time); ${RUNS} runs with different job seeds"
-  echo "per point; every method at ${BUDGETS} s, the leading methods of some scenes also at ${LONG_BUDGETS} s (each"
+  echo "per point${CPUS:+, each seed run on both cores (CPUs ${CPUS}: 2 x ${RUNS} runs)}; every method at ${BUDGETS} s, the leading methods of some scenes also at ${LONG_BUDGETS} s (each"
   echo "scene's table shows which)."${NOTE:+ $NOTE}
   echo "References: ${REF_METHOD}${REF_METHODS:+ (per scene: ${REF_METHODS})} in 4 independent parts (their spread gives the reference's own noise floor and"
   echo "brightness error, reported per scene). relMSE = mean over pixels and channels of"
