@@ -24,6 +24,10 @@
 #     on that scene pt's error per second is half bdpt's, see docs/RESULTS.md)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
+#   KEEP=1 (the page keeps the rows of every scene not in SCENES from the current docs/results tables: a
+#     page with a few scenes rerun and the others as they were; results_page.py --keep)
+#   HEADER=FILE (a Markdown file for the page's header instead of the generated one, e.g. one that says
+#     where each scene's rows come from when KEEP pools several sessions' runs)
 # The references (REF_METHOD, REF_SPP spp in 4 independent parts, THREADS threads; 2 with CPUS) are cached in $WORK/refs, keyed by
 # the scene's content hash and the settings, so a second regeneration skips them. Two instances with
 # disjoint SCENES (and CPU=0 / CPU=1) can run side by side; run one more with PAGE_ONLY=1 at the end.
@@ -126,7 +130,16 @@ fi
   echo "[runs.csv](results/runs.csv), [acceptance.csv](results/acceptance.csv), [refs.csv](results/refs.csv)."
   echo "Flags (outlier, stuck chain, brightness) come from \`tools/eval/stability.h\`."
 } > "$WORK/header.md"
+if [[ -n "${HEADER:-}" ]]; then cp "$HEADER" "$WORK/header.md"; fi
 mkdir -p docs/results
+keep=()
+if [[ "${KEEP:-0}" == "1" ]]; then  # the current page's tables, before they are replaced
+  rm -rf "$WORK/kept-page"
+  mkdir -p "$WORK/kept-page"
+  cp docs/results/*.csv "$WORK/kept-page/"
+  keep=(--keep "$WORK/kept-page")
+fi
 rm -rf docs/results/*.png docs/results/*.csv docs/results/maps docs/results/summary.md
 /usr/bin/python3 tools/eval/results_page.py --out docs/results --page docs/RESULTS.md --header "$WORK/header.md" \
+  "${keep[@]}" \
   $(ls -d "$WORK"/*-short "$WORK"/*-short-?? "$WORK"/*-long "$WORK"/*-long-?? 2>/dev/null)

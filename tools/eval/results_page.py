@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Combines several `mltfarm eval` output directories into one results page (issue 9 item 6).
 
-usage: /usr/bin/python3 tools/eval/results_page.py --out DIR --page PAGE.md [--header FILE] EVALDIR...
+usage: /usr/bin/python3 tools/eval/results_page.py --out DIR --page PAGE.md [--header FILE] [--keep OLDDIR] EVALDIR...
 
 Each EVALDIR holds what one `mltfarm eval` call wrote (runs.csv, acceptance.csv, refs.csv,
 calibration.csv, kinds.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
@@ -61,30 +61,48 @@ def pct(x):
     return "%+.2f%%" % (100 * x)
 
 
-def pool(dirs, out):
-    """Pools the tables of every eval directory into out/; returns (runs, refs, acceptance)."""
+def pool(dirs, out, keep=None):
+    """Pools the tables of every eval directory into out/; returns (runs, refs, acceptance).
+
+    keep: a directory of pooled tables (a previous page's docs/results) whose rows are kept for every scene
+    that no eval directory has: a page with a few scenes rerun and the others as they were."""
     runs, acc, refs, cal, kinds = [], [], OrderedDict(), [], []
     fields = {}
+    fresh = set()
     for d in dirs:
-        r, f = read_csv(os.path.join(d, "runs.csv"))
+        r, _ = read_csv(os.path.join(d, "runs.csv"))
         if not r:
             sys.exit("results_page.py: %s has no runs" % os.path.join(d, "runs.csv"))
+        fresh |= {x["scene"] for x in r}
+    sources = [(d, None) for d in dirs] + ([(keep, fresh)] if keep else [])
+    for d, drop in sources:
+        r, f = read_csv(os.path.join(d, "runs.csv"))
+        if drop is not None:
+            if not r:
+                sys.exit("results_page.py: --keep %s has no runs.csv" % d)
+            r = [x for x in r if x["scene"] not in drop]
         # The union of the columns, in order: eval outputs written before a column was added lack it.
         fields["runs"] = fields.get("runs", []) + [c for c in f if c not in fields.get("runs", [])]
         runs += r
+        def kept(rows):  # a kept directory's rows of the scenes not rerun
+            return rows if drop is None else [x for x in rows if x["scene"] not in drop]
+
         a, f = read_csv(os.path.join(d, "acceptance.csv"))
+        a = kept(a)
         if f:
             fields["acc"] = f
         acc += a
         k, f = read_csv(os.path.join(d, "kinds.csv"))  # per mutation kind; older eval outputs have none
+        k = kept(k)
         if f:
             fields["kinds"] = f
         kinds += k
         rr, f = read_csv(os.path.join(d, "refs.csv"))
         fields["refs"] = f
-        for x in rr:
+        for x in kept(rr):
             refs.setdefault(x["scene"], x)
         c, f = read_csv(os.path.join(d, "calibration.csv"))
+        c = kept(c)
         if f:
             fields["cal"] = f
         cal += c
@@ -303,9 +321,13 @@ def main():
     ap.add_argument("--out", required=True, help="directory for the pooled tables and the charts")
     ap.add_argument("--page", required=True, help="the Markdown page to write")
     ap.add_argument("--header", help="a Markdown file put at the top of the page")
+    ap.add_argument("--keep", metavar="DIR", help="pooled tables of a previous page (its --out): their rows of "
+                    "every scene the eval directories do not have are kept")
     ap.add_argument("dirs", nargs="+", help="mltfarm eval output directories")
     a = ap.parse_args()
-    runs, refs, budgets, kinds = pool(a.dirs, a.out)
+    if a.keep and os.path.realpath(a.keep) == os.path.realpath(a.out):
+        sys.exit("results_page.py: --keep %s is --out: copy it first (the pooled tables are rewritten)" % a.keep)
+    runs, refs, budgets, kinds = pool(a.dirs, a.out, a.keep)
     subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "charts.py"), a.out], check=True)
     out_rel = os.path.relpath(a.out, os.path.dirname(os.path.abspath(a.page)))
     lines = []
