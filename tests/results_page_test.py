@@ -94,33 +94,38 @@ def main():
 
 
 def check_keep(tmp, previous):
-    """--keep: caustic-mirror rerun (new rows, new reference), cornell-box's rows kept from the previous page's
-    pooled tables; caustic-mirror's old rows, kinds and reference are gone."""
+    """--keep: caustic-mirror's pt and pssmlt rerun at 4 and 16 s against a new reference and pssmlt added at
+    64 s; every other (scene, method, budget) is kept from the previous page's pooled tables (caustic-mirror's
+    bdpt and mmlt rows and mmlt's mutation kinds among them); the rerun ones' old rows are gone."""
     rerun = []
     for run in range(2):
         for b, bi in ((4, 0), (16, 1)):
             rerun.append(run_row("caustic-mirror", "pt", bi, b, run, 0.2 * 4 / b, 0.0))
             rerun.append(run_row("caustic-mirror", "pssmlt", bi, b, run, 0.01 * 4 / b, 0.0, plan=0.01 * b))
+        rerun.append(run_row("caustic-mirror", "pssmlt", 0, 64, run, 0.001, 0.0, plan=0.64))
     write_eval_dir(os.path.join(tmp, "b-short"), rerun, ["caustic-mirror"], {"caustic-mirror": 1e-4})
     out, page = os.path.join(tmp, "pooled2"), os.path.join(tmp, "PAGE2.md")
     subprocess.run([sys.executable, SCRIPT, "--out", out, "--page", page, "--keep", previous,
                     os.path.join(tmp, "b-short")], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, "runs.csv"), newline="") as f:
         pooled = list(csv.DictReader(f))
-    cornell = [r for r in pooled if r["scene"] == "cornell-box"]
-    assert len(cornell) == 3 * 2 * 2 + 3 * 2, len(cornell)  # bdpt and mmlt at 4 and 16 s, both at 64 s
-    assert sorted((r["method"], r["budget"]) for r in pooled if r["scene"] == "caustic-mirror") == sorted(
-        (r["method"], str(r["budget"])) for r in rerun)
+
+    def rows(scene, method):
+        return sorted((float(r["budget"]), r["relMSE"]) for r in pooled if (r["scene"], r["method"]) == (scene, method))
+    assert len([r for r in pooled if r["scene"] == "cornell-box"]) == 3 * 2 * 2 + 3 * 2  # kept, 4, 16 and 64 s
+    assert rows("caustic-mirror", "pssmlt") == sorted((float(r["budget"]), str(r["relMSE"])) for r in rerun
+                                                      if r["method"] == "pssmlt"), rows("caustic-mirror", "pssmlt")
+    assert len(rows("caustic-mirror", "pt")) == 4 and len(rows("caustic-mirror", "mmlt")) == 6  # fresh; kept
     assert {(float(r["budget"]), r["budget_index"]) for r in pooled} == {(4.0, "0"), (16.0, "1"), (64.0, "2")}
     with open(os.path.join(out, "refs.csv"), newline="") as f:
         refs = {r["scene"]: r for r in csv.DictReader(f)}
     assert set(refs) == {"caustic-mirror", "cornell-box"} and float(refs["caustic-mirror"]["relMSE_floor"]) == 1e-4
     with open(os.path.join(out, "kinds.csv"), newline="") as f:
-        assert not [r for r in csv.DictReader(f) if r["scene"] == "caustic-mirror"], "the rerun scene's old kinds"
+        assert len([r for r in csv.DictReader(f) if r["method"] == "mmlt"]) == 6, "mmlt's kinds kept"
     text = open(page).read()
     assert "- 16 s: mmlt / bdpt relMSE = 1.50 (not met)" in text, text  # cornell-box, kept
-    # The rerun's reference (floor 1e-4) against its own best: 1e-4 / (2.5e-3 - 1e-4) = 0.042.
-    assert "| caustic-mirror | bdpt spp=64 parts=4 | 1.00e-04 | pssmlt, 16 s | 2.50e-03 | 0.042 | yes |" in text, text
+    # The new reference (floor 1e-4) against the best at the scene's largest budget: 1e-4 / (1e-3 - 1e-4).
+    assert "| caustic-mirror | bdpt spp=64 parts=4 | 1.00e-04 | pssmlt, 64 s | 1.00e-03 | 0.111 | no |" in text, text
     # --keep onto its own --out would read the tables it rewrites: refused.
     r = subprocess.run([sys.executable, SCRIPT, "--out", out, "--page", page, "--keep", out,
                         os.path.join(tmp, "b-short")], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)

@@ -64,29 +64,35 @@ def pct(x):
 def pool(dirs, out, keep=None):
     """Pools the tables of every eval directory into out/; returns (runs, refs, acceptance).
 
-    keep: a directory of pooled tables (a previous page's docs/results) whose rows are kept for every scene
-    that no eval directory has: a page with a few scenes rerun and the others as they were."""
+    keep: a directory of pooled tables (a previous page's docs/results) whose rows are kept for every
+    (scene, method, budget) that no eval directory has: a page with a few scenes rerun, or a budget added to
+    one, and the rest as it was. A scene's reference comes from the eval directories when they have one."""
     runs, acc, refs, cal, kinds = [], [], OrderedDict(), [], []
     fields = {}
-    fresh = set()
+    fresh = set()  # (scene, method, budget) of the eval directories' runs
     for d in dirs:
         r, _ = read_csv(os.path.join(d, "runs.csv"))
         if not r:
             sys.exit("results_page.py: %s has no runs" % os.path.join(d, "runs.csv"))
-        fresh |= {x["scene"] for x in r}
-    sources = [(d, None) for d in dirs] + ([(keep, fresh)] if keep else [])
-    for d, drop in sources:
+        fresh |= {(x["scene"], x["method"], float(x["budget"])) for x in r}
+    sources = [(d, False) for d in dirs] + ([(keep, True)] if keep else [])
+    for d, only_kept in sources:
+        def kept(rows):  # a kept directory's rows whose (scene, method[, budget]) was not rerun
+            if not only_kept:
+                return rows
+            if rows and "budget" in rows[0]:
+                return [x for x in rows if (x["scene"], x["method"], float(x["budget"])) not in fresh]
+            if rows and "method" in rows[0]:  # calibration.csv: per (scene, method)
+                return [x for x in rows if not any(k[:2] == (x["scene"], x["method"]) for k in fresh)]
+            return rows  # refs.csv: the eval directories' come first and win
+
         r, f = read_csv(os.path.join(d, "runs.csv"))
-        if drop is not None:
-            if not r:
-                sys.exit("results_page.py: --keep %s has no runs.csv" % d)
-            r = [x for x in r if x["scene"] not in drop]
+        if only_kept and not r:
+            sys.exit("results_page.py: --keep %s has no runs.csv" % d)
+        r = kept(r)
         # The union of the columns, in order: eval outputs written before a column was added lack it.
         fields["runs"] = fields.get("runs", []) + [c for c in f if c not in fields.get("runs", [])]
         runs += r
-        def kept(rows):  # a kept directory's rows of the scenes not rerun
-            return rows if drop is None else [x for x in rows if x["scene"] not in drop]
-
         a, f = read_csv(os.path.join(d, "acceptance.csv"))
         a = kept(a)
         if f:
@@ -99,7 +105,7 @@ def pool(dirs, out, keep=None):
         kinds += k
         rr, f = read_csv(os.path.join(d, "refs.csv"))
         fields["refs"] = f
-        for x in kept(rr):
+        for x in rr:
             refs.setdefault(x["scene"], x)
         c, f = read_csv(os.path.join(d, "calibration.csv"))
         c = kept(c)
@@ -322,7 +328,7 @@ def main():
     ap.add_argument("--page", required=True, help="the Markdown page to write")
     ap.add_argument("--header", help="a Markdown file put at the top of the page")
     ap.add_argument("--keep", metavar="DIR", help="pooled tables of a previous page (its --out): their rows of "
-                    "every scene the eval directories do not have are kept")
+                    "every (scene, method, budget) the eval directories do not have are kept")
     ap.add_argument("dirs", nargs="+", help="mltfarm eval output directories")
     a = ap.parse_args()
     if a.keep and os.path.realpath(a.keep) == os.path.realpath(a.out):
