@@ -16,7 +16,7 @@
 #     point has 2 x RUNS runs, RUNS seeds on each core; the page of 2026-12-05 has glossy-plates and the
 #     Cornell box's 4- and 16-s rows so)
 #   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
-#     REF_SPPS=caustic-mirror=4096,cornell-box=4096,door-ajar=2048,glossy-plates=2048,textured-serialized=2048
+#     REF_SPPS=caustic-mirror=25600,cornell-box=4096,door-ajar=3072,glossy-plates=2048,textured-serialized=2048
 #     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's
 #     error, where it is met)
 #   REF_METHODS=scene=method,... (a scene's reference method instead of REF_METHOD=bdpt; the page of
@@ -24,8 +24,9 @@
 #     on that scene pt's error per second is half bdpt's, see docs/RESULTS.md)
 #   WORK=build/results-work  BUILD=build  PAGE_ONLY=1 (only pool what $WORK holds and write the page)
 #   NOTE="..." (a sentence added to the page header, e.g. which commits the runs came from)
-#   KEEP=1 (the page keeps the rows of every scene not in SCENES from the current docs/results tables: a
-#     page with a few scenes rerun and the others as they were; results_page.py --keep)
+#   KEEP=1 (the page keeps the current docs/results tables' rows of every (scene, method, budget) this run
+#     does not redo: a page with a few scenes rerun, or a budget added to one, and the rest as it was;
+#     results_page.py --keep)
 #   HEADER=FILE (a Markdown file for the page's header instead of the generated one, e.g. one that says
 #     where each scene's rows come from when KEEP pools several sessions' runs)
 # The references (REF_METHOD, REF_SPP spp in 4 independent parts, THREADS threads; 2 with CPUS) are cached in $WORK/refs, keyed by
