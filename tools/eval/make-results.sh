@@ -13,8 +13,8 @@
 #   (LONG_SCENES= , set and empty, runs no scene at the long budgets)
 #   RUNS=5  RES=256  THREADS=1  REF_SPP=2048  CPU= (a core to pin every run to with taskset; empty = none)
 #   CPUS=a,b (instead of CPU: every method on both cores, two passes with the cores swapped, so that each
-#     point has 2 x RUNS runs, RUNS seeds on each core; the page of 2026-12-05 has glossy-plates and the
-#     Cornell box's 4- and 16-s rows so)
+#     point has 2 x RUNS runs, RUNS seeds on each core; the page of 2026-12-05 has every scene but
+#     caustic-mirror and the Cornell box's 64-s group so)
 #   REF_SPPS=scene=spp,... (a scene's own reference size instead of REF_SPP; the page of 2026-12-05:
 #     REF_SPPS=caustic-mirror=25600,cornell-box=4096,door-ajar=3072,glossy-plates=2048,textured-serialized=2048
 #     and REF_SPP=1024, so that each reference's noise floor is at most a tenth of the best method's

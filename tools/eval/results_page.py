@@ -69,24 +69,22 @@ def pool(dirs, out, keep=None):
     one, and the rest as it was. A scene's reference comes from the eval directories when they have one."""
     runs, acc, refs, cal, kinds = [], [], OrderedDict(), [], []
     fields = {}
-    fresh = set()  # (scene, method, budget) of the eval directories' runs
+    eval_runs = {}  # each eval directory's runs.csv, read once
     for d in dirs:
-        r, _ = read_csv(os.path.join(d, "runs.csv"))
-        if not r:
+        eval_runs[d] = read_csv(os.path.join(d, "runs.csv"))
+        if not eval_runs[d][0]:
             sys.exit("results_page.py: %s has no runs" % os.path.join(d, "runs.csv"))
-        fresh |= {(x["scene"], x["method"], float(x["budget"])) for x in r}
+
+    def run_key(x):
+        return (x["scene"], x["method"], float(x["budget"]))
+    fresh = {run_key(x) for r, _ in eval_runs.values() for x in r}  # rows the kept tables give up
+    fresh_methods = {k[:2] for k in fresh}  # calibration.csv is per (scene, method)
     sources = [(d, False) for d in dirs] + ([(keep, True)] if keep else [])
     for d, only_kept in sources:
-        def kept(rows):  # a kept directory's rows whose (scene, method[, budget]) was not rerun
-            if not only_kept:
-                return rows
-            if rows and "budget" in rows[0]:
-                return [x for x in rows if (x["scene"], x["method"], float(x["budget"])) not in fresh]
-            if rows and "method" in rows[0]:  # calibration.csv: per (scene, method)
-                return [x for x in rows if not any(k[:2] == (x["scene"], x["method"]) for k in fresh)]
-            return rows  # refs.csv: the eval directories' come first and win
+        def kept(rows, key=run_key, rerun=fresh):  # a kept directory's rows that were not rerun
+            return [x for x in rows if key(x) not in rerun] if only_kept else rows
 
-        r, f = read_csv(os.path.join(d, "runs.csv"))
+        r, f = eval_runs[d] if d in eval_runs else read_csv(os.path.join(d, "runs.csv"))
         if only_kept and not r:
             sys.exit("results_page.py: --keep %s has no runs.csv" % d)
         r = kept(r)
@@ -105,10 +103,10 @@ def pool(dirs, out, keep=None):
         kinds += k
         rr, f = read_csv(os.path.join(d, "refs.csv"))
         fields["refs"] = f
-        for x in rr:
+        for x in rr:  # the eval directories' references come first and win
             refs.setdefault(x["scene"], x)
         c, f = read_csv(os.path.join(d, "calibration.csv"))
-        c = kept(c)
+        c = kept(c, key=lambda x: (x["scene"], x["method"]), rerun=fresh_methods)
         if f:
             fields["cal"] = f
         cal += c
