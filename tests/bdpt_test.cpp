@@ -134,6 +134,14 @@ TEST(Bdpt, MisWeightsOfOnePathSumToOne) {
   // Delta lights cannot end a camera path (s = 0); their weights are covered by the agreement tests.
 }
 
+// A sphere light sampled by its cone: the strategy s = 1 has another density of the light's point than
+// the strategies s >= 2 (misWeight's factor k); the weights must still sum to one.
+TEST(Bdpt, MisWeightsSumToOneWithAConeSampledSphereLight) {
+  const auto scene = RenderScene::build(test::cornellBoxSphereLight(16, 16));
+  for (int n : {3, 4, 5})
+    for (uint64_t seed : {1, 2, 3}) expectWeightsSumToOne(*scene, n, false, seed + 10 * n);
+}
+
 // ---- Each technique, unweighted, is unbiased ------------------------------------------------------
 // Reference for paths of exactly k segments: pt with maxDepth k minus pt with maxDepth k-1 on the same
 // primary samples (no roulette): the paths coincide up to k-1 segments, so the difference is exactly
@@ -205,6 +213,31 @@ TEST(Bdpt, WeightedTechniquesOfOneLengthSumToTheReference) {
   std::printf("k=%d weighted sum %.5f +- %.5f vs pt %.5f +- %.5f\n", k, sum.mean[0], sum.stdErr[0], ref.mean[0],
               ref.stdErr[0]);
   EXPECT_LT(test::maxZ(sum, ref), kZ);
+}
+
+// The same with a cone-sampled sphere light, for k = 2 and 3 (s = 1's weight carries misWeight's k).
+TEST(Bdpt, WeightedTechniquesSumToTheReferenceWithAConeSampledSphereLight) {
+  const auto scene = RenderScene::build(test::cornellBoxSphereLight(16, 12));
+  for (int k : {2, 3}) {
+    const test::ImageStats ref = ptExactLength(*scene, k, 500 + k, 400000);
+    test::ImageStats sum = ref;
+    std::fill(sum.mean.begin(), sum.mean.end(), 0.0);
+    std::fill(sum.stdErr.begin(), sum.stdErr.end(), 0.0);
+    for (int s = 0; s <= k; ++s) {
+      const test::ImageStats st = technique(*scene, s, k + 1 - s, true, 600 + 10 * k + s, 150000);
+      for (int e = 0; e < sum.size(); ++e) {
+        sum.mean[e] += st.mean[e];
+        sum.stdErr[e] = std::hypot(sum.stdErr[e], st.stdErr[e]);
+      }
+    }
+    std::printf("k=%d weighted sum %.5f +- %.5f vs pt %.5f +- %.5f\n", k, sum.mean[0], sum.stdErr[0], ref.mean[0],
+                ref.stdErr[0]);
+    EXPECT_GT(ref.mean[0], 10 * ref.stdErr[0]);
+    EXPECT_LT(test::maxZ(sum, ref), kZ) << "k = " << k;
+    // The cone's next-event estimate alone (s = 1, unweighted) is unbiased too.
+    const test::ImageStats nee = technique(*scene, 1, k, false, 700 + k, 200000);
+    EXPECT_LT(test::maxZ(nee, ref), kZ) << "s = 1 unweighted, k = " << k;
+  }
 }
 
 }  // namespace

@@ -54,6 +54,16 @@ inline Vec3 sampleUniformCone(Vec2 u, float cosThetaMax) {
   return {std::cos(phi) * sinTheta, std::sin(phi) * sinTheta, cosTheta};
 }
 inline float uniformConePdfW(float cosThetaMax) { return 1 / (2 * kPi * (1 - cosThetaMax)); }
+// The same cone given by a = 1 - cosThetaMax, accurate for narrow cones: with cos(theta) itself a light
+// 0.003 rad wide has a ~ 5e-6 and float cosines near 1 step by 6e-8, so the cone would hold only ~75
+// distinct rings. Here 1 - cos(theta) = u.x a and sin^2(theta) = (1 - cos)(1 + cos) = u.x a (2 - u.x a),
+// both without cancellation. pdfW = 1 / (2 pi a).
+inline Vec3 sampleUniformConeNarrow(Vec2 u, float a) {
+  const float oneMinusCos = u.x * a;
+  const float sinTheta = std::sqrt(fmaxNum(0.0f, oneMinusCos * (2 - oneMinusCos)));
+  const float phi = u.y * 2 * kPi;
+  return {std::cos(phi) * sinTheta, std::sin(phi) * sinTheta, 1 - oneMinusCos};
+}
 
 // Uniform barycentrics on a triangle; pdfA = 1 / area. Returns (b0, b1); b2 = 1 - b0 - b1.
 inline Vec2 sampleUniformTriangle(Vec2 u) {

@@ -105,6 +105,18 @@ inline Vec2 invertUniformCone(const Vec3& w, float cosThetaMax) {
           clampPrimary(float(phi / (2 * 3.14159265358979323846)))};
 }
 
+// Inverse of sampleUniformConeNarrow(u, a) for a unit w: 1 - cos(theta) = (x^2 + y^2) / (1 + z) without
+// cancellation. nullopt outside the cone. Jacobian 1 / (2 pi a).
+inline std::optional<Vec2> invertUniformConeNarrow(const Vec3& w, float a) {
+  if (!(w.z > 0)) return std::nullopt;
+  const double oneMinusCos = (double(w.x) * w.x + double(w.y) * w.y) / (1 + double(w.z));
+  const double ux = oneMinusCos / double(a);
+  if (!(ux <= 1 + 1e-4)) return std::nullopt;
+  double phi = std::atan2(double(w.y), double(w.x));
+  if (phi < 0) phi += 2 * 3.14159265358979323846;
+  return Vec2(clampPrimary(float(ux)), clampPrimary(float(phi / (2 * 3.14159265358979323846))));
+}
+
 // Inverse of sampleUniformTriangle: (b0, b1) = (1 - sqrt(u.x), u.y sqrt(u.x)). Jacobian 1 / area.
 inline Vec2 invertUniformTriangle(double b0, double b1) {
   const double s = std::clamp(1 - b0, 0.0, 1.0);

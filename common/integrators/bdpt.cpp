@@ -274,23 +274,40 @@ float misWeight(const RenderScene& scene, Vertex* light, int s, Vertex* camera, 
   if (qs) qs->pdfRev = pt->pdf(scene, ptMinus, *qs);
   if (qsMinus) qsMinus->pdfRev = qs->pdf(scene, pt, *qsMinus);
 
+  // The strategy s = 1 finds the light's point y by sampleLi from its neighbour x, the strategies s >= 2 by
+  // sampleLe: the ratio chain below carries sampleLe's density of y (pdfLightOrigin) for both, and k, the
+  // first's density over the second's (Light::pdfLiOverPdfPos; exactly 1 unless they differ: a sphere
+  // light's cone), corrects the strategy s = 1: its ratio r_1 = k r_1' when it is not the strategy
+  // evaluated, and every r_i = r_i' / k when it is (p_1 = k p_1').
+  float k = 1;
+  {
+    const Vertex* y = s > 0 ? &light[0] : (t >= 2 ? &camera[t - 1] : nullptr);
+    const Vertex* x = s > 1 ? &light[1] : s == 1 ? pt : ptMinus;
+    if (y && x && y->light && y->isOnSurface()) k = y->light->pdfLiOverPdfPos(x->p, y->p, y->ng);
+  }
+
   // Veach eq. 10.9 by ratios r_i = p_i / p_s of neighbouring strategies (pbrt-v3 sec. 16.3.4);
   // the power heuristic (beta = 2) sums r_i^2. A zero density stands for a delta and is remapped to 1.
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   const bool power = heuristic == MisHeuristic::Power;
   float sumRi = 0, ri = 1;
+  const auto add = [&](float r, bool strategyS1) {
+    if (strategyS1) r *= k;
+    sumRi += power ? r * r : r;
+  };
   for (int i = t - 1; i > 0; --i) {
     ri *= remap0(camera[i].pdfRev) / remap0(camera[i].pdfFwd);
     // Strategy (s + t - i, i); (1, 1) is not a bdpt strategy.
-    if (!camera[i].delta && !camera[i - 1].delta && !(i == 1 && s + t - i == 1)) sumRi += power ? ri * ri : ri;
+    if (!camera[i].delta && !camera[i - 1].delta && !(i == 1 && s + t - i == 1)) add(ri, s + t - i == 1);
   }
   ri = 1;
   for (int i = s - 1; i >= 0; --i) {
     ri *= remap0(light[i].pdfRev) / remap0(light[i].pdfFwd);
     const bool deltaLightVertex = i > 0 ? light[i - 1].delta : light[0].isDeltaLight();
     // Strategy (i, s + t - i); (1, 1) excluded as above.
-    if (!light[i].delta && !deltaLightVertex && !(i == 1 && s + t - i == 1)) sumRi += power ? ri * ri : ri;
+    if (!light[i].delta && !deltaLightVertex && !(i == 1 && s + t - i == 1)) add(ri, i == 1);
   }
+  if (s == 1 && k != 1) sumRi /= power ? k * k : k;
 
   if (qsMinus) qsMinus->pdfRev = qsMinusRev;
   if (qs) qs->pdfRev = qsRev;

@@ -42,6 +42,15 @@ struct LightLeInverse {
   Inverse2D dir;           // uDir; jacobian = pdfDir of the direction (per unit solid angle)
 };
 
+// A light's own surface as a ray target: the closest hit of a ray against that light's mesh alone, no
+// other geometry (the render layer implements it over Embree). A convex area light uses it to turn a
+// direction sampled in the cone it subtends into the point it sees (area_light.cpp).
+class EmitterSurface {
+ public:
+  virtual ~EmitterSurface() = default;
+  virtual std::optional<SurfaceHit> intersect(const Ray& ray) const = 0;
+};
+
 class Light {
  public:
   virtual ~Light() = default;
@@ -67,6 +76,14 @@ class Light {
                                                        const InverseGamma& gamma) const {
     (void)pLight; (void)nLight; (void)w; (void)gamma;
     return std::nullopt;
+  }
+  // sampleLi's density of pLight from ref per unit area (solid-angle pdfLi times cos / d^2) over sampleLe's
+  // pdfPos of the same point: what bdpt's MIS weight multiplies the strategy s = 1's density by, when
+  // a light samples the point it is seen from differently from the point it emits from (a convex area
+  // light's cone). Exactly 1 for every light that samples both the same way (the default).
+  virtual float pdfLiOverPdfPos(const Vec3& ref, const Vec3& pLight, const Vec3& nLight) const {
+    (void)ref; (void)pLight; (void)nLight;
+    return 1.0f;
   }
   // Densities of an emitted ray leaving pLight (normal nLight) in direction w.
   virtual void pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const = 0;

@@ -1,5 +1,6 @@
 // The one file that talks to Embree 3: one device, one scene, one triangle geometry per mesh
-// (geomID = mesh index), robust traversal, high build quality. Hits are completed from our own copy of
+// (geomID = mesh index), robust traversal, high build quality; an emitting convex mesh's geometry is also
+// attached to a scene of its own (intersectMesh: a sphere light's cone sampling). Hits are completed from our own copy of
 // the mesh data: ng from the triangle's positions (counter-clockwise = front; computed once per triangle
 // at build), ns and uv interpolated with Embree's barycentrics (p = (1-u-v) p0 + u p1 + v p2).
 #include "common/render/accel.h"
@@ -15,6 +16,8 @@ namespace mlt {
 struct Accel::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  // Per mesh: a scene holding that mesh alone (geomID 0), for emitting convex meshes; else null.
+  std::vector<RTCScene> meshScenes;
   std::vector<MeshDesc> meshes;  // positions, normals, uvs, indices (names kept for messages)
   // Per mesh and triangle: the unit geometric normal cross(p1 - p0, p2 - p0) / length, computed once with
   // the same float operations a hit used to repeat (the same bits), or ok = false for a degenerate
@@ -28,6 +31,8 @@ struct Accel::Impl {
   std::string error;             // first device error reported by Embree's callback
 
   ~Impl() {
+    for (RTCScene m : meshScenes)
+      if (m) rtcReleaseScene(m);
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
   }
@@ -36,6 +41,7 @@ struct Accel::Impl {
     std::lock_guard<std::mutex> lock(impl->errorMutex);
     if (impl->error.empty()) impl->error = "code " + std::to_string(int(code)) + ": " + (str ? str : "(no message)");
   }
+  SurfaceHit completeHit(const Ray& ray, const RTCRayHit& rh, uint32_t meshId) const;
   // Throws if Embree reported an error since the last check (the callback must not throw itself).
   void check(const char* what) {
     std::lock_guard<std::mutex> lock(errorMutex);
@@ -130,6 +136,15 @@ Accel::Accel(const std::vector<MeshDesc>& meshes) : impl_(std::make_unique<Impl>
     }
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(I.scene, geom, static_cast<unsigned>(m));
+    if (mesh.convex && mesh.emission) {  // the same geometry, attached to a scene of its own as well
+      RTCScene own = rtcNewScene(I.device);
+      rtcSetSceneFlags(own, RTC_SCENE_FLAG_ROBUST);
+      rtcSetSceneBuildQuality(own, RTC_BUILD_QUALITY_HIGH);
+      rtcAttachGeometryByID(own, geom, 0);
+      rtcCommitScene(own);
+      I.meshScenes.resize(I.meshes.size(), nullptr);
+      I.meshScenes[m] = own;
+    }
     rtcReleaseGeometry(geom);
     I.check(("geometry of mesh '" + mesh.name + "'").c_str());
   }
@@ -152,17 +167,36 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   RTCRayHit rh = toRtc(ray);
   rtcIntersect1(impl_->scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  return impl_->completeHit(ray, rh, rh.hit.geomID);
+}
 
-  const MeshDesc& mesh = impl_->meshes[rh.hit.geomID];
+bool Accel::hasMeshScene(uint32_t meshId) const {
+  return meshId < impl_->meshScenes.size() && impl_->meshScenes[meshId];
+}
+
+std::optional<SurfaceHit> Accel::intersectMesh(uint32_t meshId, const Ray& ray) const {
+  if (!hasMeshScene(meshId)) throw std::logic_error("Accel::intersectMesh: mesh " + std::to_string(meshId) + " has no scene of its own");
+  if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh = toRtc(ray);
+  rtcIntersect1(impl_->meshScenes[meshId], &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  return impl_->completeHit(ray, rh, meshId);
+}
+
+// The SurfaceHit of Embree's hit on triangle rh.hit.primID of mesh `meshId`, from our copy of the mesh.
+SurfaceHit Accel::Impl::completeHit(const Ray& ray, const RTCRayHit& rh, uint32_t meshId) const {
+  const MeshDesc& mesh = meshes[meshId];
   const uint32_t* tri = &mesh.indices[3 * size_t(rh.hit.primID)];
   const float u = rh.hit.u, v = rh.hit.v, w = 1 - u - v;
 
   SurfaceHit h;
   h.t = rh.ray.tfar;
   h.p = ray.o + ray.d * h.t;
-  h.meshId = rh.hit.geomID;
+  h.meshId = meshId;
   h.primId = rh.hit.primID;
-  const Impl::FaceNormal& face = impl_->faceNormals[rh.hit.geomID][rh.hit.primID];
+  const FaceNormal& face = faceNormals[meshId][rh.hit.primID];
   h.ng = face.ok ? face.ng : normalize(-ray.d);  // degenerate triangle: face the ray
   h.ns = h.ng;
   if (!mesh.normals.empty()) {

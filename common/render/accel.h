@@ -33,6 +33,11 @@ class Accel {
   std::optional<SurfaceHit> intersect(const Ray& ray) const;
   // True if anything blocks the open segment (ray.tMin, ray.tMax).
   bool occluded(const Ray& ray) const;
+  // Closest hit against mesh `meshId` alone (an Embree scene of its own, built for every emitting convex
+  // mesh: MeshDesc::convex): what a convex area light's cone sampling traces. nullopt on a miss; throws
+  // std::logic_error for a mesh that has no scene of its own.
+  std::optional<SurfaceHit> intersectMesh(uint32_t meshId, const Ray& ray) const;
+  bool hasMeshScene(uint32_t meshId) const;
   Bounds3 bounds() const { return bounds_; }
 
  private:

@@ -42,6 +42,18 @@ void validate(const SceneDesc& desc) {
   if (!emits) throw std::runtime_error("scene has no emitters");
 }
 
+// A convex emitter's own mesh as a ray target (EmitterSurface), traced by the scene's Accel, which the
+// scene keeps alive as long as its lights.
+class MeshSurface final : public EmitterSurface {
+ public:
+  MeshSurface(const Accel& accel, uint32_t mesh) : accel_(accel), mesh_(mesh) {}
+  std::optional<SurfaceHit> intersect(const Ray& ray) const override { return accel_.intersectMesh(mesh_, ray); }
+
+ private:
+  const Accel& accel_;
+  uint32_t mesh_;
+};
+
 }  // namespace
 
 std::unique_ptr<RenderScene> RenderScene::build(const SceneDesc& desc) {
@@ -72,7 +84,9 @@ std::unique_ptr<RenderScene> RenderScene::build(const SceneDesc& desc) {
   for (size_t m = 0; m < d.meshes.size(); ++m) {
     if (!d.meshes[m].emission) continue;
     s->meshLight_[m] = static_cast<int>(s->lights_.size());
-    s->lights_.push_back(makeAreaLight(d.meshes[m]));
+    std::shared_ptr<const EmitterSurface> surface;
+    if (s->accel_->hasMeshScene(uint32_t(m))) surface = std::make_shared<MeshSurface>(*s->accel_, uint32_t(m));
+    s->lights_.push_back(makeAreaLight(d.meshes[m], std::move(surface)));
   }
 
   std::vector<const Light*> ptrs;

@@ -56,6 +56,7 @@ void Loader::parseShape(const XmlElement& el) {
     mesh = makeDisk();
   } else if (type == "sphere") {
     mesh = makeSphere();
+    mesh.convex = true;
     const Vec3 center = props.optVec("center").value_or(Vec3(0.0f));
     const double radius = props.getFloat("radius", 1.0);
     if (!(radius > 0)) props.fail(*props.find("radius"), "radius must be positive");

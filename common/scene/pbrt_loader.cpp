@@ -426,6 +426,7 @@ void Loader::shape(const Token& where) {
     for (const char* n : {"zmin", "zmax", "phimax"})
       if (const Param* q = p.find(n)) p.fail(*q, std::string("Shape \"sphere\": partial spheres ('") + n + "') are not supported");
     mesh = makeSphere();
+    mesh.convex = true;
     transformMesh(mesh, Transform::scale(Vec3(float(r))), true);
   } else if (type == "disk") {
     analytic = true;

@@ -70,6 +70,9 @@ struct MeshDesc {
   // A textured radiance: Le(uv) from this texture at the point's uv (emission then only marks the mesh as
   // emitting). Light selection uses the texture's average.
   std::optional<TextureDesc> emissionTexture;
+  // The front end made this mesh as a closed convex surface (a sphere, possibly under an affine transform).
+  // An area light on it may then be sampled by the solid angle its bounding sphere subtends (area_light.cpp).
+  bool convex = false;
 };
 
 struct LightDesc {

@@ -149,6 +149,17 @@ double furnaceRadiance(double Le, double rho, int maxDepth) {
   return Le * sum;
 }
 
+SceneDesc cornellBoxSphereLight(int width, int height) {
+  SceneDesc s = cornellShell(width, height);
+  s.meshes.push_back(boxMesh("block", 0, Vec3(0.35f, -0.6f, 0.3f), Vec3(0.3f, 0.4f, 0.3f), 0.3f));
+  const int black = addDiffuse(s, Color(0.0f), "light");
+  MeshDesc light = sphereMesh("sphere light", black, Vec3(-0.3f, 0.55f, 0.2f), 0.15f, 16, false, true);
+  light.emission = Color(40.0f);
+  light.convex = true;
+  s.meshes.push_back(light);
+  return s;
+}
+
 SceneDesc smallCornellBox(int width, int height, Color Le) {
   SceneDesc s = cornellShell(width, height);
   s.meshes.push_back(boxMesh("block", 0, Vec3(0.35f, -0.6f, 0.3f), Vec3(0.3f, 0.4f, 0.3f), 0.3f));

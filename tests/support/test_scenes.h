@@ -33,5 +33,8 @@ SceneDesc cornellBoxSpecularPointSpot(int width, int height);
 // mirror walls) near the ceiling's left corner, plus the block. Light selection by power picks the small
 // light twice as often as the panel (power 8 vs 4) though the panel lights most of the room.
 SceneDesc twoLightsReflector(int width, int height);
+// The box with the block and, instead of the ceiling panel, a sphere light (radius 0.15, Le = 40, 16
+// rings, marked convex: sampled by the solid angle it subtends from outside its bounding sphere).
+SceneDesc cornellBoxSphereLight(int width, int height);
 
 }  // namespace mlt::test
