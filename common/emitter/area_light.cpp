@@ -26,9 +26,10 @@
 // whatever the tessellation (the cone's directions that miss the mesh are lost density, not bias). The
 // choice between (C1) and the area density depends on ref alone (outside the bounding sphere, with a
 // margin), so sampleLi, pdfLi and invertSampleLi always agree. sampleLe (light subpaths) stays by area.
-// bdpt's MIS weights keep the area density for the strategy s = 1 (pdfLightOrigin), as pbrt-v3 does for
-// its sphere lights: any weights that sum to one over the strategies are unbiased; only the weighting is
-// a little off the balance heuristic for that strategy.
+// bdpt's MIS weight gives the strategy s = 1 this density per unit area (pdfLiOverPdfPos: misWeight's
+// factor k). pbrt-v3 keeps the area density there for its sphere lights, which stays unbiased (weights
+// that sum to one) but weighs the cone's estimate as if it were area sampling's, so the bidirectional
+// methods would hardly gain from the cone (docs/CHAINS.md, "Sphere lights by solid angle").
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
