@@ -183,6 +183,7 @@ AreaLight::AreaLight(const MeshDesc& mesh, std::shared_ptr<const EmitterSurface>
     }
     if (outward && r2 > 0) {
       surface_ = std::move(surface);
+      liDensityDiffers_ = true;
       boundCenter_ = c;
       boundRadius2_ = float(r2 * (1 + 1e-5));
     }

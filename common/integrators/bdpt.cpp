@@ -283,7 +283,7 @@ float misWeight(const RenderScene& scene, Vertex* light, int s, Vertex* camera, 
   {
     const Vertex* y = s > 0 ? &light[0] : (t >= 2 ? &camera[t - 1] : nullptr);
     const Vertex* x = s > 1 ? &light[1] : s == 1 ? pt : ptMinus;
-    if (y && x && y->light && y->isOnSurface()) k = y->light->pdfLiOverPdfPos(x->p, y->p, y->ng);
+    if (y && x && y->light && y->light->liDensityDiffers() && y->isOnSurface()) k = y->light->pdfLiOverPdfPos(x->p, y->p, y->ng);
   }
 
   // Veach eq. 10.9 by ratios r_i = p_i / p_s of neighbouring strategies (pbrt-v3 sec. 16.3.4);

@@ -85,6 +85,9 @@ class Light {
     (void)ref; (void)pLight; (void)nLight;
     return 1.0f;
   }
+  // Whether pdfLiOverPdfPos can differ from 1 (so that bdpt's MIS weight skips the call for every other
+  // light: it is made for each strategy of every sample).
+  bool liDensityDiffers() const { return liDensityDiffers_; }
   // Densities of an emitted ray leaving pLight (normal nLight) in direction w.
   virtual void pdfLe(const Vec3& pLight, const Vec3& nLight, const Vec3& w, float* pdfPos, float* pdfDir) const = 0;
   // Area lights: radiance leaving a point with normal n in direction w (0 on the back side).
@@ -97,6 +100,9 @@ class Light {
   virtual bool deltaPosition() const { return false; }
   virtual bool deltaDirection() const { return false; }
   virtual bool infinite() const { return false; }
+
+ protected:
+  bool liDensityDiffers_ = false;  // set by a light whose sampleLi samples its point otherwise than sampleLe
 };
 
 }  // namespace mlt

@@ -41,7 +41,7 @@ struct Accel::Impl {
     std::lock_guard<std::mutex> lock(impl->errorMutex);
     if (impl->error.empty()) impl->error = "code " + std::to_string(int(code)) + ": " + (str ? str : "(no message)");
   }
-  SurfaceHit completeHit(const Ray& ray, const RTCRayHit& rh, uint32_t meshId) const;
+  [[gnu::always_inline]] inline SurfaceHit completeHit(const Ray& ray, const RTCRayHit& rh, uint32_t meshId) const;
   // Throws if Embree reported an error since the last check (the callback must not throw itself).
   void check(const char* what) {
     std::lock_guard<std::mutex> lock(errorMutex);
