@@ -3,7 +3,8 @@
 // the cone's own coordinates for a light far away (no rings from float cosines), the sample's fields,
 // the irradiance against area sampling of the same mesh and against a sphere's closed form, the inverse
 // used by reversible-jump MLT, and the cases that keep area sampling (a point inside the bounding sphere,
-// a mesh facing inward, no surface to trace).
+// a mesh facing inward, no surface to trace), and sampleLiVisible (one ray through the scene for the
+// point and its visibility) against sampleLi and a shadow ray on the bundled scenes with sphere lights.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +17,8 @@
 #include "common/emitter/make_light.h"
 #include "common/interfaces/light.h"
 #include "common/render/accel.h"
+#include "common/render/render_scene.h"
+#include "common/scene/mitsuba_loader.h"
 #include "common/scene/mesh_utils.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
@@ -32,6 +35,7 @@ constexpr int kChi2Tests = 4;  // Sidak correction across this file's chi-square
 struct OwnSurface final : EmitterSurface {
   explicit OwnSurface(const MeshDesc& m) : accel(std::vector<MeshDesc>{m}) {}
   std::optional<SurfaceHit> intersect(const Ray& r) const override { return accel.intersectMesh(0, r); }
+  std::optional<SurfaceHit> firstInScene(const Ray& r) const override { return accel.intersectIfOn(0, r); }
   Accel accel;
 };
 
@@ -284,6 +288,62 @@ TEST(SphereLight, KeepsAreaSamplingWhereTheConeDoesNotApply) {
       EXPECT_EQ(c->pLight.y, d->pLight.y);
       EXPECT_EQ(c->pdfW, d->pdfW);
     }
+  }
+}
+
+// sampleLiVisible's one ray through the scene against sampleLi followed by the shadow ray pt and bdpt
+// traced before, from points on every surface of the two bundled scenes with sphere lights (plates,
+// walls and a glass sphere between the points and the lights: many samples blocked). Where both see the
+// light the sample must be sampleLi's, bit for bit (the same ray from ref, the same first facet); the
+// verdicts may differ only where the two rays leave ref's surface differently (tMin along the ray
+// instead of an offset along the normal): a few in a thousand at most.
+TEST(SphereLight, VisibleSampleIsSampleLiWithItsShadowRay) {
+  for (const char* name : {"glossy-plates", "caustic-mirror"}) {
+    SCOPED_TRACE(name);
+    const auto scene = RenderScene::build(loadMitsubaScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + name + ".xml"));
+    Pcg32 rng(7, 11);
+    const Vec3 c = scene->center();
+    const float r = 0.6f * scene->radius();
+    int drawn = 0, both = 0, blocked = 0, differ = 0;
+    for (int i = 0; i < 20000; ++i) {
+      Ray ray;
+      ray.o = c + Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f) * r;
+      ray.d = sampleUniformSphere({rng.uniform(), rng.uniform()});
+      const std::optional<SurfaceHit> hit = scene->intersect(ray);
+      if (!hit || hit->light >= 0) continue;
+      for (const auto& light : scene->lights()) {
+        if (!light->liDensityDiffers()) continue;
+        const Vec2 u(rng.uniform(), rng.uniform());
+        const std::optional<LightLiSample> a = light->sampleLi(hit->p, u);
+        const std::optional<LightLiSample> b = light->sampleLiVisible(hit->p, hit->ng, u);
+        drawn += a.has_value();
+        const bool seen = a && scene->visible(hit->p, hit->ng, a->pLight, a->nLight);
+        if (seen != b.has_value()) {
+          ++differ;
+          continue;
+        }
+        if (!b) {
+          blocked += a.has_value();
+          continue;
+        }
+        ++both;
+        EXPECT_TRUE(b->unoccluded);
+        EXPECT_EQ(b->pLight.x, a->pLight.x);
+        EXPECT_EQ(b->pLight.y, a->pLight.y);
+        EXPECT_EQ(b->pLight.z, a->pLight.z);
+        EXPECT_EQ(b->nLight.x, a->nLight.x);
+        EXPECT_EQ(b->nLight.y, a->nLight.y);
+        EXPECT_EQ(b->nLight.z, a->nLight.z);
+        EXPECT_EQ(b->pdfW, a->pdfW);
+        EXPECT_EQ(b->pdfA, a->pdfA);
+        EXPECT_EQ(b->L.r, a->L.r);
+      }
+    }
+    std::printf("%s: %d samples drawn, %d seen by both, %d blocked for both, %d verdicts differ\n", name, drawn,
+                both, blocked, differ);
+    EXPECT_GT(both, 2000);
+    EXPECT_GT(blocked, 250);  // the test covers blocked samples too
+    EXPECT_LE(differ, 0.003 * drawn) << "the one-ray visibility disagrees with the shadow ray";
   }
 }
 

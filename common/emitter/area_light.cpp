@@ -51,6 +51,7 @@ class AreaLight final : public Light {
   AreaLight(const MeshDesc& mesh, std::shared_ptr<const EmitterSurface> surface);
 
   std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const override;
+  std::optional<LightLiSample> sampleLiVisible(const Vec3& ref, const Vec3& ng, Vec2 u) const override;
   float pdfLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight, const Vec3& wi) const override;
   float pdfLiOverPdfPos(const Vec3& ref, const Vec3& pLight, const Vec3& nLight) const override;
   std::optional<LightLeSample> sampleLe(Vec2 uPos, Vec2 uDir) const override;
@@ -73,13 +74,19 @@ class AreaLight final : public Light {
   Color Le(Vec2 uv) const { return tex_ ? tex_->eval(uv) : Le_; }
   PointSample samplePoint(Vec2 u) const;
   // The cone that ref sees the bounding sphere in (C1), or nullopt: area sampling (no surface, ref inside
-  // the bounding sphere or too close to it).
+  // the bounding sphere or too close to it). The cone's frame is built only where a direction is drawn or
+  // inverted (coneFrame): the densities need a and pdfW alone.
   struct Cone {
-    Frame frame;  // n: unit direction from ref to the sphere's centre
-    float a;      // 1 - cos(theta_max)
-    float pdfW;   // 1 / (2 pi a)
+    Vec3 toCenter;  // boundCenter_ - ref
+    float d2;       // |toCenter|^2
+    float a;        // 1 - cos(theta_max)
+    float pdfW;     // 1 / (2 pi a)
   };
   std::optional<Cone> coneFrom(const Vec3& ref) const;
+  static Frame coneFrame(const Cone& cone) { return Frame(cone.toCenter / std::sqrt(cone.d2)); }
+  // (C1)'s sample along the unit direction w from ref, given the first hit of the ray from ref on the
+  // light's mesh (nullopt: the hit faces away).
+  std::optional<LightLiSample> coneSample(const Vec3& ref, const Vec3& w, const SurfaceHit& hit, const Cone& cone) const;
   std::shared_ptr<const EmitterSurface> surface_;  // set only when the cone sampling applies
   Vec3 boundCenter_;
   float boundRadius2_ = 0;
@@ -199,7 +206,22 @@ std::optional<AreaLight::Cone> AreaLight::coneFrom(const Vec3& ref) const {
   const float sin2 = boundRadius2_ / d2;
   const float cosMax = std::sqrt(1 - sin2);
   const float a = sin2 / (1 + cosMax);  // = 1 - cosMax without cancellation
-  return Cone{Frame(toCenter / std::sqrt(d2)), a, 1 / (2 * kPi * a)};
+  return Cone{toCenter, d2, a, 1 / (2 * kPi * a)};
+}
+
+std::optional<LightLiSample> AreaLight::coneSample(const Vec3& ref, const Vec3& w, const SurfaceHit& hit,
+                                                   const Cone& cone) const {
+  const float cosLight = -dot(w, hit.ng);
+  if (!(cosLight > 0)) return std::nullopt;  // grazing: the first hit must face ref (C1)
+  LightLiSample s;
+  s.L = Le(hit.uv);
+  s.wi = w;
+  s.pLight = hit.p;
+  s.nLight = hit.ng;
+  s.uv = hit.uv;
+  s.pdfW = cone.pdfW;
+  s.pdfA = pdfWToA(cone.pdfW, distanceSquared(ref, hit.p), cosLight);
+  return s;
 }
 
 void AreaLight::buildGrid() {
@@ -296,20 +318,10 @@ std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const 
   if (const std::optional<Cone> cone = coneFrom(ref)) {  // (C1)
     Ray r;
     r.o = ref;
-    r.d = normalize(cone->frame.toWorld(sampleUniformConeNarrow(u, cone->a)));
+    r.d = normalize(coneFrame(*cone).toWorld(sampleUniformConeNarrow(u, cone->a)));
     const std::optional<SurfaceHit> hit = surface_->intersect(r);
     if (!hit) return std::nullopt;  // a direction of the cone that misses the mesh
-    const float cosLight = -dot(r.d, hit->ng);
-    if (!(cosLight > 0)) return std::nullopt;  // grazing: the first hit must face ref (C1)
-    LightLiSample s;
-    s.L = Le(hit->uv);
-    s.wi = r.d;
-    s.pLight = hit->p;
-    s.nLight = hit->ng;
-    s.uv = hit->uv;
-    s.pdfW = cone->pdfW;
-    s.pdfA = pdfWToA(cone->pdfW, distanceSquared(ref, hit->p), cosLight);
-    return s;
+    return coneSample(ref, r.d, *hit, *cone);
   }
   const PointSample ps = samplePoint(u);
   Vec3 wi = ps.p - ref;
@@ -326,6 +338,29 @@ std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const 
   s.uv = ps.uv;
   s.pdfA = 1.0f / area_;
   s.pdfW = pdfAToW(s.pdfA, d2, std::fabs(cosLight));  // Veach eq. 8.10
+  return s;
+}
+
+// (C1) with the light's point and its visibility from one ray through the whole scene. The ray starts at
+// ref itself, on the line sampleLi's ray follows, so its first hit on the mesh is sampleLi's point (the
+// same facet, the same ray); tMin takes it off ref's surface as far as offsetRayOrigin would (its scale
+// h, along the normal), which for a direction at an angle to the surface means h / |cos|, kept at most
+// 20 h and short of the light.
+std::optional<LightLiSample> AreaLight::sampleLiVisible(const Vec3& ref, const Vec3& ng, Vec2 u) const {
+  const std::optional<Cone> cone = coneFrom(ref);
+  if (!cone) return sampleLi(ref, u);
+  Ray r;
+  r.o = ref;
+  r.d = normalize(coneFrame(*cone).toWorld(sampleUniformConeNarrow(u, cone->a)));
+  if (ng.x != 0 || ng.y != 0 || ng.z != 0) {
+    const float h = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(ref.x), fmaxNum(std::fabs(ref.y), std::fabs(ref.z))));
+    const float gap = std::sqrt(cone->d2) - std::sqrt(boundRadius2_);  // > 0: ref is outside the sphere
+    r.tMin = std::fmin(h / std::fmax(absDot(r.d, ng), 0.05f), 0.5f * gap);
+  }
+  const std::optional<SurfaceHit> hit = surface_->firstInScene(r);
+  if (!hit) return std::nullopt;  // blocked, or a direction of the cone that misses the mesh
+  std::optional<LightLiSample> s = coneSample(ref, r.d, *hit, *cone);
+  if (s) s->unoccluded = true;
   return s;
 }
 
@@ -445,7 +480,7 @@ std::optional<Inverse2D> AreaLight::invertSampleLi(const Vec3& ref, const Vec3& 
     const Vec3 w = (pLight - ref) / std::sqrt(d2);
     const float cosLight = -dot(w, nLight);
     if (!(cosLight > 0)) return std::nullopt;
-    const std::optional<Vec2> u = invertUniformConeNarrow(cone->frame.toLocal(w), cone->a);
+    const std::optional<Vec2> u = invertUniformConeNarrow(coneFrame(*cone).toLocal(w), cone->a);
     if (!u) return std::nullopt;
     return Inverse2D{*u, pdfWToA(cone->pdfW, d2, cosLight)};
   }

@@ -221,7 +221,7 @@ Color connectBdpt(const RenderScene& scene, SampleSource& source, Vertex* light,
     const int index = scene.lightSampler().sample(source.next1D(), &pmf);
     if (index < 0 || !(pmf > 0)) return {};
     const Light& l = scene.light(index);
-    const std::optional<LightLiSample> ls = l.sampleLi(pt.p, source.next2D());
+    const std::optional<LightLiSample> ls = l.sampleLiVisible(pt.p, pt.ng, source.next2D());
     if (!ls || ls->L.isBlack() || !(ls->pdfW > 0)) return {};
     Vertex& q = *sampled;
     q = Vertex();
@@ -235,7 +235,7 @@ Color connectBdpt(const RenderScene& scene, SampleSource& source, Vertex* light,
     q.pdfFwd = q.pdfLightOrigin(scene, pt);
     L = pt.beta * pt.f(q) * q.beta;
     if (pt.isOnSurface()) L *= absDot(ls->wi, pt.ns);
-    if (L.isBlack() || !scene.visible(pt.p, pt.ng, q.p, q.ng)) return {};
+    if (L.isBlack() || !(ls->unoccluded || scene.visible(pt.p, pt.ng, q.p, q.ng))) return {};
   } else {
     const Vertex& qs = light[s - 1];
     const Vertex& pt = camera[t - 1];

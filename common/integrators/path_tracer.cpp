@@ -85,11 +85,11 @@ Color PathTracer::Li(SampleSource& source, const Vec2* pixel, Vec2* pRaster) con
       const Vec2 uLight = source.next2D();
       if (li >= 0 && pmf > 0) {
         const Light& light = scene.light(li);
-        const std::optional<LightLiSample> ls = light.sampleLi(hit->p, uLight);
+        const std::optional<LightLiSample> ls = light.sampleLiVisible(hit->p, hit->ng, uLight);
         if (ls && !ls->L.isBlack() && ls->pdfW > 0) {
           const Vec3 wiL = frame.toLocal(ls->wi);
           const Color f = bsdf.eval(woL, wiL, query) * std::fabs(wiL.z);
-          if (!f.isBlack() && scene.visible(hit->p, hit->ng, ls->pLight, ls->nLight)) {
+          if (!f.isBlack() && (ls->unoccluded || scene.visible(hit->p, hit->ng, ls->pLight, ls->nLight))) {
             const float lightPdf = pmf * ls->pdfW;
             float w = 1;
             if (!(ls->deltaPosition || light.deltaPosition() || light.deltaDirection()))

@@ -23,6 +23,7 @@ struct LightLiSample {     // next-event estimation: a point on the light as see
   float pdfA = 0;          // area density of pLight (1 for delta position); for infinite lights: pdfW
   bool deltaPosition = false;
   bool infinite = false;
+  bool unoccluded = false; // sampleLiVisible traced the segment ref - pLight and found it free: no shadow ray
 };
 
 struct LightLeSample {     // emission: a ray leaving the light (light subpath start)
@@ -49,6 +50,10 @@ class EmitterSurface {
  public:
   virtual ~EmitterSurface() = default;
   virtual std::optional<SurfaceHit> intersect(const Ray& ray) const = 0;
+  // The closest hit of `ray` among all the scene's surfaces if it lies on this light's mesh, else nullopt
+  // (another surface comes first, or nothing is hit): one ray that finds the light's point and tests its
+  // visibility together.
+  virtual std::optional<SurfaceHit> firstInScene(const Ray& ray) const = 0;
 };
 
 class Light {
@@ -58,6 +63,14 @@ class Light {
   virtual void preprocess(const Vec3& sceneCenter, float sceneRadius) { (void)sceneCenter; (void)sceneRadius; }
   // Consumes 2 numbers.
   virtual std::optional<LightLiSample> sampleLi(const Vec3& ref, Vec2 u) const = 0;
+  // sampleLi from a point on a surface with geometric normal ng (zero: on no surface), for a caller that
+  // would next trace a shadow ray to the sample. A light that can (a convex area light's cone) finds its
+  // point and tests that segment with one ray through the scene: it returns nullopt for a blocked sample
+  // and sets `unoccluded` on the sample it returns. The same numbers, points and densities as sampleLi.
+  virtual std::optional<LightLiSample> sampleLiVisible(const Vec3& ref, const Vec3& ng, Vec2 u) const {
+    (void)ng;
+    return sampleLi(ref, u);
+  }
   // Solid-angle density with which sampleLi(ref) picks direction wi hitting pLight with normal nLight.
   virtual float pdfLi(const Vec3& ref, const Vec3& pLight, const Vec3& nLight, const Vec3& wi) const = 0;
   // Inverse of sampleLi(ref): the u with which it returns pLight (normal nLight); jacobian = the pdfA it

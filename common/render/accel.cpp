@@ -170,6 +170,16 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   return impl_->completeHit(ray, rh, rh.hit.geomID);
 }
 
+std::optional<SurfaceHit> Accel::intersectIfOn(uint32_t meshId, const Ray& ray) const {
+  if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh = toRtc(ray);
+  rtcIntersect1(impl_->scene, &ctx, &rh);
+  if (rh.hit.geomID != meshId) return std::nullopt;  // a miss (RTC_INVALID_GEOMETRY_ID) or another mesh
+  return impl_->completeHit(ray, rh, meshId);
+}
+
 bool Accel::hasMeshScene(uint32_t meshId) const {
   return meshId < impl_->meshScenes.size() && impl_->meshScenes[meshId];
 }

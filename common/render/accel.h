@@ -38,6 +38,10 @@ class Accel {
   // std::logic_error for a mesh that has no scene of its own.
   std::optional<SurfaceHit> intersectMesh(uint32_t meshId, const Ray& ray) const;
   bool hasMeshScene(uint32_t meshId) const;
+  // The closest hit of the whole scene in (ray.tMin, ray.tMax) if it lies on mesh `meshId`, else nullopt
+  // (completed only then): what a convex area light's next-event estimate traces to find its point and
+  // whether anything comes before it in one ray.
+  std::optional<SurfaceHit> intersectIfOn(uint32_t meshId, const Ray& ray) const;
   Bounds3 bounds() const { return bounds_; }
 
  private:

@@ -48,6 +48,7 @@ class MeshSurface final : public EmitterSurface {
  public:
   MeshSurface(const Accel& accel, uint32_t mesh) : accel_(accel), mesh_(mesh) {}
   std::optional<SurfaceHit> intersect(const Ray& ray) const override { return accel_.intersectMesh(mesh_, ray); }
+  std::optional<SurfaceHit> firstInScene(const Ray& ray) const override { return accel_.intersectIfOn(mesh_, ray); }
 
  private:
   const Accel& accel_;
