@@ -106,6 +106,9 @@ class Coordinator final : public ClientHandler, public WorkerHandler {
     uint32_t mergedTasks = 0;
     std::map<uint32_t, PartialResult> waiting;
     bool deleted = false;  // DeleteJob: files gone, invisible to clients; kept for threads still holding the id
+    // Leases their worker gave back (ReturnLeases, a worker stopping): never resumed by liveLease, so that
+    // a heartbeat or upload of that worker still in flight cannot take the task back after the return.
+    std::set<std::string> returnedLeases;
   };
   struct LeaseRec {
     std::string workerId;

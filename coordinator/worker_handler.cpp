@@ -113,6 +113,10 @@ Coordinator::LeaseRec* Coordinator::liveLease(const std::string& workerId, const
     return nullptr;
   }
   Job& job = j->second;
+  if (job.returnedLeases.count(leaseId)) {
+    why = fmt::format("lease_id: lease {} was returned by its worker", leaseId.substr(0, 80));
+    return nullptr;
+  }
   if (job.taskState[claim->task] != TaskState::Pending) {
     why = fmt::format("lease_id: lease {} of task {} of {} expired and the task was {}", leaseId.substr(0, 80),
                       claim->task, job.status.jobId,
@@ -233,6 +237,7 @@ void Coordinator::returnLeases(const std::string& workerId, const std::vector<st
     auto it = leases_.find(id);
     if (it == leases_.end() || it->second.workerId != workerId) continue;
     auto job = jobs_.find(it->second.job);
+    if (job != jobs_.end()) job->second.returnedLeases.insert(id);
     if (job != jobs_.end() && job->second.taskState[it->second.task] == TaskState::Leased) {
       job->second.taskState[it->second.task] = TaskState::Pending;
       if (job->second.status.state == JobState::Running) {
