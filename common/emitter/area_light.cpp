@@ -26,6 +26,8 @@
 // whatever the tessellation (the cone's directions that miss the mesh are lost density, not bias). The
 // choice between (C1) and the area density depends on ref alone (outside the bounding sphere, with a
 // margin), so sampleLi, pdfLi and invertSampleLi always agree. sampleLe (light subpaths) stays by area.
+// sampleLiVisible (pt's and bdpt's next-event estimates) finds the same point with one ray through the
+// whole scene, which tests its visibility as well (see there).
 // bdpt's MIS weight gives the strategy s = 1 this density per unit area (pdfLiOverPdfPos: misWeight's
 // factor k). pbrt-v3 keeps the area density there for its sphere lights, which stays unbiased (weights
 // that sum to one) but weighs the cone's estimate as if it were area sampling's, so the bidirectional
