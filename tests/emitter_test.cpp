@@ -15,29 +15,16 @@
 #include "common/scene/mesh_utils.h"
 #include "common/scene/scene_desc.h"
 #include "tests/support/chi2.h"
+#include "tests/support/mesh_density.h"
 
 namespace mlt {
 namespace {
 
 using test::chi2Test2D;
 using test::chi2TestSphere;
+using test::meshPdfW;
 
 constexpr int kChi2Tests = 17;  // Sidak correction across the chi-square tests of this file
-
-// Moller-Trumbore: distance along unit w from o to triangle (p0,p1,p2), or -1.
-float hitTriangle(const Vec3& o, const Vec3& w, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
-  const Vec3 e1 = p1 - p0, e2 = p2 - p0, pv = cross(w, e2);
-  const float det = dot(e1, pv);
-  if (std::fabs(det) < 1e-12f) return -1;
-  const Vec3 tv = o - p0;
-  const float u = dot(tv, pv) / det;
-  if (u < 0 || u > 1) return -1;
-  const Vec3 qv = cross(tv, e1);
-  const float v = dot(w, qv) / det;
-  if (v < 0 || u + v > 1) return -1;
-  const float t = dot(e2, qv) / det;
-  return t > 0 ? t : -1;
-}
 
 // An emitting octahedron with unequal triangle areas (stretched along x), centered at c.
 MeshDesc octahedron(const Vec3& c, const Vec3& scale, Color Le) {
@@ -64,18 +51,6 @@ MeshDesc trapezoid(Color Le) {
   return m;
 }
 bool insideTrapezoid(Vec2 p) { return p.x >= 0 && p.y >= 0 && p.y <= 2 && p.x <= 4 - 0.5f * p.y; }
-
-// Solid-angle density of a mesh light's sampleLi at ref: sum over every triangle the ray crosses of the
-// light's own pdfLi (directions hitting the mesh twice are sampled via either point).
-double meshPdfW(const Light& light, const MeshDesc& m, const Vec3& ref, const Vec3& w) {
-  double pdf = 0;
-  for (size_t i = 0; i < m.indices.size(); i += 3) {
-    const Vec3 &p0 = m.positions[m.indices[i]], &p1 = m.positions[m.indices[i + 1]], &p2 = m.positions[m.indices[i + 2]];
-    const float t = hitTriangle(ref, w, p0, p1, p2);
-    if (t > 0) pdf += light.pdfLi(ref, ref + w * t, normalize(cross(p1 - p0, p2 - p0)), w);
-  }
-  return pdf;
-}
 
 // ---- area light -----------------------------------------------------------------------------------
 TEST(AreaLight, SampleLiMatchesPdfLiFromSeveralPoints) {

@@ -86,6 +86,13 @@ class AreaLight final : public Light {
   };
   std::optional<Cone> coneFrom(const Vec3& ref) const;
   static Frame coneFrame(const Cone& cone) { return Frame(cone.toCenter / std::sqrt(cone.d2)); }
+  // The ray from ref along the cone's direction for u (sampleLi and sampleLiVisible draw the same one).
+  static Ray coneRay(const Vec3& ref, Vec2 u, const Cone& cone) {
+    Ray r;
+    r.o = ref;
+    r.d = normalize(coneFrame(cone).toWorld(sampleUniformConeNarrow(u, cone.a)));
+    return r;
+  }
   // (C1)'s sample along the unit direction w from ref, given the first hit of the ray from ref on the
   // light's mesh (nullopt: the hit faces away).
   std::optional<LightLiSample> coneSample(const Vec3& ref, const Vec3& w, const SurfaceHit& hit, const Cone& cone) const;
@@ -318,9 +325,7 @@ AreaLight::PointSample AreaLight::samplePoint(Vec2 u) const {
 
 std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const {
   if (const std::optional<Cone> cone = coneFrom(ref)) {  // (C1)
-    Ray r;
-    r.o = ref;
-    r.d = normalize(coneFrame(*cone).toWorld(sampleUniformConeNarrow(u, cone->a)));
+    const Ray r = coneRay(ref, u, *cone);
     const std::optional<SurfaceHit> hit = surface_->intersect(r);
     if (!hit) return std::nullopt;  // a direction of the cone that misses the mesh
     return coneSample(ref, r.d, *hit, *cone);
@@ -351,11 +356,9 @@ std::optional<LightLiSample> AreaLight::sampleLi(const Vec3& ref, Vec2 u) const 
 std::optional<LightLiSample> AreaLight::sampleLiVisible(const Vec3& ref, const Vec3& ng, Vec2 u) const {
   const std::optional<Cone> cone = coneFrom(ref);
   if (!cone) return sampleLi(ref, u);
-  Ray r;
-  r.o = ref;
-  r.d = normalize(coneFrame(*cone).toWorld(sampleUniformConeNarrow(u, cone->a)));
+  Ray r = coneRay(ref, u, *cone);
   if (ng.x != 0 || ng.y != 0 || ng.z != 0) {
-    const float h = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(ref.x), fmaxNum(std::fabs(ref.y), std::fabs(ref.z))));
+    const float h = rayOffsetScale(ref);
     const float gap = std::sqrt(cone->d2) - std::sqrt(boundRadius2_);  // > 0: ref is outside the sphere
     r.tMin = std::fmin(h / std::fmax(absDot(r.d, ng), 0.05f), 0.5f * gap);
   }
@@ -391,7 +394,7 @@ std::optional<LightLeSample> AreaLight::sampleLe(Vec2 uPos, Vec2 uDir) const {
   s.L = Le(ps.uv);
   s.ray.o = ps.p;  // the exact point on the light; tMin skips the emitter's own surface
   s.ray.d = normalize(Frame(ps.ng).toWorld(local));
-  s.ray.tMin = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(ps.p.x), fmaxNum(std::fabs(ps.p.y), std::fabs(ps.p.z))));
+  s.ray.tMin = rayOffsetScale(ps.p);
   s.nLight = ps.ng;
   s.uv = ps.uv;
   s.pdfPos = 1.0f / area_;

@@ -26,11 +26,17 @@ struct SurfaceHit {
   Frame shading() const { return Frame(ns); }
 };
 
+// How far a ray leaving a surface point p must start from it to clear the surface's float error: 1e-4 of
+// p's largest coordinate, at least 1e-4. offsetRayOrigin moves by it along the normal; rays that start at
+// p itself (a light's emitted ray, a cone-sampled light ray) use it as tMin.
+inline float rayOffsetScale(const Vec3& p) {
+  return 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(p.x), fmaxNum(std::fabs(p.y), std::fabs(p.z))));
+}
+
 // Offset a ray origin off a surface along the geometric normal to avoid self-intersection; `w` is the
 // direction the new ray will travel.
 inline Vec3 offsetRayOrigin(const Vec3& p, const Vec3& ng, const Vec3& w) {
-  const float scale = 1e-4f * fmaxNum(1.0f, fmaxNum(std::fabs(p.x), fmaxNum(std::fabs(p.y), std::fabs(p.z))));
-  return p + (dot(w, ng) > 0 ? ng : -ng) * scale;
+  return p + (dot(w, ng) > 0 ? ng : -ng) * rayOffsetScale(p);
 }
 
 }  // namespace mlt

@@ -160,22 +160,28 @@ RayObserver* setThreadRayObserver(RayObserver* observer) {
   return previous;
 }
 
-std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
+namespace {
+// Embree's closest hit of `ray` in `scene` (geomID RTC_INVALID_GEOMETRY_ID: a miss), counted by the
+// thread's ray observer; intersect, intersectIfOn and intersectMesh differ only in the scene and in
+// which hits they complete.
+[[gnu::always_inline]] inline RTCRayHit closestHit(RTCScene scene, const Ray& ray) {
   if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh = toRtc(ray);
-  rtcIntersect1(impl_->scene, &ctx, &rh);
+  rtcIntersect1(scene, &ctx, &rh);
+  return rh;
+}
+}  // namespace
+
+std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
+  const RTCRayHit rh = closestHit(impl_->scene, ray);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   return impl_->completeHit(ray, rh, rh.hit.geomID);
 }
 
 std::optional<SurfaceHit> Accel::intersectIfOn(uint32_t meshId, const Ray& ray) const {
-  if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh = toRtc(ray);
-  rtcIntersect1(impl_->scene, &ctx, &rh);
+  const RTCRayHit rh = closestHit(impl_->scene, ray);
   if (rh.hit.geomID != meshId) return std::nullopt;  // a miss (RTC_INVALID_GEOMETRY_ID) or another mesh
   return impl_->completeHit(ray, rh, meshId);
 }
@@ -186,11 +192,7 @@ bool Accel::hasMeshScene(uint32_t meshId) const {
 
 std::optional<SurfaceHit> Accel::intersectMesh(uint32_t meshId, const Ray& ray) const {
   if (!hasMeshScene(meshId)) throw std::logic_error("Accel::intersectMesh: mesh " + std::to_string(meshId) + " has no scene of its own");
-  if (tlRayObserver) [[unlikely]] tlRayObserver->closestHit(ray);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh = toRtc(ray);
-  rtcIntersect1(impl_->meshScenes[meshId], &ctx, &rh);
+  const RTCRayHit rh = closestHit(impl_->meshScenes[meshId], ray);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   return impl_->completeHit(ray, rh, meshId);
 }
