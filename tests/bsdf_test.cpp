@@ -263,6 +263,64 @@ TEST(BsdfConsistency, SampleMatchesEvalAndPdf) {
   }
 }
 
+// Bsdf::reads(): the path samplers do not read the numbers a BSDF says it ignores (bsdf_numbers.h), so
+// sample() must return the same, bit for bit, whatever they hold; and the flags must be those of the
+// BSDF's lobes (a diffuse surface and a mirror each drop numbers: the test is not vacuous).
+bool sameSample(const std::optional<BsdfSample>& a, const std::optional<BsdfSample>& b) {
+  if (!a || !b) return !a && !b;
+  return a->wi.x == b->wi.x && a->wi.y == b->wi.y && a->wi.z == b->wi.z && a->f.r == b->f.r && a->f.g == b->f.g &&
+         a->f.b == b->f.b && a->pdfW == b->pdfW && a->pdfRevW == b->pdfRevW && a->delta == b->delta && a->eta == b->eta;
+}
+
+TEST(BsdfReads, UnreadNumbersDoNotChangeTheSample) {
+  std::vector<Case> cases = nonDeltaCases();
+  const std::vector<float> both = {0.9f, 0.5f, 0.1f, -0.9f, -0.5f, -0.1f};
+  for (Type t : {Type::Dielectric, Type::ThinDielectric, Type::Conductor})
+    cases.push_back(Case{t == Type::Dielectric ? "dielectric" : t == Type::ThinDielectric ? "thindielectric" : "conductor",
+                         {}, makeDesc(t, "delta"), both});
+  {
+    Case c{"twosided(conductor)", {}, makeDesc(Type::TwoSided, "twosided"), both};
+    c.scene.bsdfs.push_back(makeDesc(Type::Conductor, "inner"));
+    c.desc.nested = 0;
+    cases.push_back(std::move(c));
+  }
+  int withoutComponent = 0, withoutDirection = 0;
+  for (const Case& c : cases) {
+    const auto bsdf = c.bsdf();
+    const BsdfReads r = bsdf->reads();
+    const Type t = c.desc.type == Type::TwoSided ? c.scene.bsdfs[0].type : c.desc.type;
+    // The lobes: one lobe reads no uComponent; a Dirac lobe no uDir.
+    const bool oneLobe = t == Type::Diffuse || t == Type::Conductor || t == Type::RoughConductor;
+    const bool dirac = t == Type::Conductor || t == Type::Dielectric || t == Type::ThinDielectric;
+    EXPECT_EQ(r.component, !oneLobe) << c.name;
+    EXPECT_EQ(r.direction, !dirac) << c.name;
+    withoutComponent += !r.component;
+    withoutDirection += !r.direction;
+    Pcg32 rng(7, 3);
+    int sampled = 0;
+    for (float cosO : c.cosines)
+      for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+        const Vec3 wo = dirFromCos(cosO);
+        const BsdfQuery q{{0.3f, 0.6f}, mode};
+        for (int i = 0; i < 300; ++i) {
+          const float uc = rng.uniform(), uc2 = rng.uniform();
+          const Vec2 ud = rng.uniform2(), ud2 = rng.uniform2();
+          const std::optional<BsdfSample> s = bsdf->sample(wo, uc, ud, q);
+          sampled += s.has_value();
+          if (!r.component) {
+            EXPECT_TRUE(sameSample(s, bsdf->sample(wo, uc2, ud, q))) << c.name << " reads uComponent";
+          }
+          if (!r.direction) {
+            EXPECT_TRUE(sameSample(s, bsdf->sample(wo, uc, ud2, q))) << c.name << " reads uDir";
+          }
+        }
+      }
+    EXPECT_GT(sampled, 0) << c.name;
+  }
+  EXPECT_GE(withoutComponent, 3);
+  EXPECT_GE(withoutDirection, 3);
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Reciprocity (Veach 1997, sec. 5.3)
 // ---------------------------------------------------------------------------------------------------

@@ -38,6 +38,10 @@
 //  - Every method on every scene but caustic-mirror's lt: Embree's kernels capped at AVX2 (accel.cpp: its
 //    AVX-512 kernels, on which the digests had been recorded, give other bits; a farm must give the same
 //    bytes on every worker). The same image up to those bits.
+//  - pssmlt, pssmlt-bdpt, mmlt and rjmlt on every scene: a vertex reads only the BSDF numbers its BSDF
+//    uses (Bsdf::reads, integrators/bsdf_numbers.h: none on a mirror, no lobe choice on a diffuse
+//    surface), so the chains draw other random numbers. pt, lt, bdpt (the same numbers by index) and
+//    veach-mlt (its own path numbers) unchanged.
 //  - pssmlt, pssmlt-bdpt, mmlt and rjmlt on every scene: Kelemen MIS splatting is their default (chain.h),
 //    its large steps' share in a layer of its own developed with the bootstrap's b (develop.h (D7));
 //    veach-mlt (expected values) and pt/lt/bdpt unchanged.
@@ -228,31 +232,31 @@ const Case kCases[] = {
     Case{"cornell-box", "pt", "ea3370e2cc417deef459e000659fd68847d7acc25be4328637372e6cb878fd86"},
     Case{"cornell-box", "lt", "aac1d685dbcbddd5940fe1adc62a37adce95225788e2baf91d2b8172fc75016b"},
     Case{"cornell-box", "bdpt", "adf1acc31bfa2d30d0eada5d757155175fa2dc7d99a403b35f727e7da13933bf"},
-    Case{"cornell-box", "pssmlt", "ef8317bc4767724fcbb5fda5e056a3ee9a0fbda0a2273ac4920390f79ba028ac"},
-    Case{"cornell-box", "pssmlt-bdpt", "92002245a1b1bae200a2b964a91be140b8a674235e6fe1060eb92c224d0da5e3"},
-    Case{"cornell-box", "mmlt", "d28584051486a415dfebcecf861055a9ec2c9cfdb0bba1f1195bd3a9d5f16111"},
+    Case{"cornell-box", "pssmlt", "3b5e17ca6842106c16947553d3d0191a194e2e475ef08af3fa96cb9f103e7405"},
+    Case{"cornell-box", "pssmlt-bdpt", "73fcc5e4b9546ce234d66f9b60f527c0457d3053c8c8cb4cdd75c38243692dbb"},
+    Case{"cornell-box", "mmlt", "c62fd550c5932456ac9e60e0b990998558df1be4ec068706439942ec58dab64d"},
     Case{"caustic-mirror", "pt", "de5c83ebb199c4a8682742d6e198d5f9628cbad8f492b8eb96f7c70efc65127d"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "585fed3221fc00cc6785bdc64a6c7c2b53346b1238cf6eff02b0e17036a46377"},
-    Case{"caustic-mirror", "pssmlt", "4a39d32d7ffe24e2e3a7497af83b0490101b490177896c3198cb3df9607a9328"},
-    Case{"caustic-mirror", "pssmlt-bdpt", "338e34da600d071e774a11ba7e73fd61fff5e0fe938fd0538bfc8cb5bad5dc3b"},
-    Case{"caustic-mirror", "mmlt", "2c6673230023bb4e8b6650dd662e71d76411c87da8804026846da9778d81d729"},
+    Case{"caustic-mirror", "pssmlt", "9abbf4f23a18e33a7d88cabf8fbdc3cb68875564bb7a27d8885043fe9462eb94"},
+    Case{"caustic-mirror", "pssmlt-bdpt", "5d6b1b80611af77a495245d15b600364236383cb8f5cab7a52c328de337883fa"},
+    Case{"caustic-mirror", "mmlt", "0f021744e31bbc2445f7488676259b189cb693b08b333999edf890e8a7a228d9"},
     Case{"glossy-plates", "pt", "973edcdedd8ad8e3ba0afa3ca2334ea7fd314ef25ad074264ef7f1ff71d3a2d0"},
     Case{"glossy-plates", "lt", "30c49b64e9e3551e9215d5e0c4f9e8a239c65302411f35664ba18e8ca1bb1d04"},
     Case{"glossy-plates", "bdpt", "d0d185613ea5412571ddcb04fbde5d55f65f008f55c5e0f1248563eb262a8c58"},
-    Case{"glossy-plates", "pssmlt", "524caaf26df8cfa091a79dfd2568291727243c79c816129b4b7a1b7fb5020aab"},
-    Case{"glossy-plates", "pssmlt-bdpt", "bf88c95e3220e08d37e104418aefd0112047a527083f0f07b4d0ebfa7da31c28"},
-    Case{"glossy-plates", "mmlt", "7ba1c4fb3861e4c829a650734b68508f9e7052ee36842db3a8e404e68c4871ca"},
+    Case{"glossy-plates", "pssmlt", "9d3c3dee6ac804af007e5d8939abe00f1595350522e6ed49b87371819efae27b"},
+    Case{"glossy-plates", "pssmlt-bdpt", "a07c5f4e8101e630ad563f0607a7541cc3cf39602b6fedeaa925375c2c037fa7"},
+    Case{"glossy-plates", "mmlt", "10ade88c6b5112cf07d007e59dbe43c8653bc6611bde044d2a634415b60ea63e"},
     Case{"cornell-variety", "pt", "26873108e60b97e48986560bfac8ea037b6f8323e9a0265cf15f645ba43bcef1"},
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
     Case{"cornell-variety", "bdpt", "f82d82cb88ada1eeaaec3d3a97b0f1f9e8b3593a5886d70b94dd83fb217f8ba6"},
-    Case{"cornell-variety", "pssmlt", "6b5e05fbd403a2a715ee3c23bd92309bc72dc7a19fba48edb7690847b5a749d5"},
-    Case{"cornell-variety", "pssmlt-bdpt", "b69c6025ea7e2cbe0aaab9e825e4e7722ebba523a7705ea61a852287001a70c3"},
-    Case{"cornell-variety", "mmlt", "ae23354e21165add5d6f49aabc3c8560048e7c671a6a278135d3f61ef1fc22a5"},
-    Case{"cornell-box", "rjmlt", "1571f26e6d29e8a35867e0646f082c8d5b0e1eb31cb06cb35a4e9da179534d0e"},
-    Case{"caustic-mirror", "rjmlt", "6b89e35777d1ad5f2648c1de66c10b8f7e5ce040a78bdc7f34abaabc02051643"},
-    Case{"glossy-plates", "rjmlt", "69bec500cc2e56061c7ada6d41a75092a74747f0e3bb8aa2275fab5633ad197d"},
-    Case{"cornell-variety", "rjmlt", "32f94c0f94d8c125659da6bf2ecefa43cbaee4d0c6b964375b2ed5e8ed0ddbfe"},
+    Case{"cornell-variety", "pssmlt", "19a4dd05d795f194fc42d7a91cee09443ebb962a49333d8c844f5c5715995cd4"},
+    Case{"cornell-variety", "pssmlt-bdpt", "e78e2ca61fa313a8795d26c64954a54edf8c35238c7dabb9430012f4b88c028f"},
+    Case{"cornell-variety", "mmlt", "35e0abe38e95e5fc4d5806caf453d1902107eff972e8f169780d0ecec046d799"},
+    Case{"cornell-box", "rjmlt", "a2300e6b068e26a6b1b39f34501fe88a71db08385fe3c10d8a9f5478f675bad2"},
+    Case{"caustic-mirror", "rjmlt", "5172691fa049dcbd3a58de609c25a5cb6932afbc53b538b6fa011a2c3b51322c"},
+    Case{"glossy-plates", "rjmlt", "fa4bcb3b5769aede0ed64f81d3ed5cd0b6729051b73dabb513fc236f4e8f698e"},
+    Case{"cornell-variety", "rjmlt", "49d5142ed02d332eb612d02219f41bc306dcdf10eaaff5a9f18347df57191658"},
     Case{"cornell-box", "veach-mlt", "3c0dcdad354726d0448653d84fbd27e4ef72a2d76328535ee4b6d31d5d03051b"},
     Case{"caustic-mirror", "veach-mlt", "30b75a0bd5286ec3c752cde7b88dc34278a19d51d552edd09ebe64f95e8f711e"},
     Case{"glossy-plates", "veach-mlt", "4d573470796b895e36119a8d478306bfc795e59c2299683245f067d238d31c9f"},

@@ -12,7 +12,9 @@ namespace {
 
 class Conductor final : public Bsdf {
  public:
-  Conductor(Color eta, Color k, bool mirror, TexturePtr r) : eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {}
+  Conductor(Color eta, Color k, bool mirror, TexturePtr r) : eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {
+    reads_ = {false, false};  // one Dirac lobe
+  }
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }

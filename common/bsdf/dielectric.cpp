@@ -14,7 +14,9 @@ Color colorMax(const Color& a, const Color& b) { return {std::fmax(a.r, b.r), st
 
 class Dielectric final : public Bsdf {
  public:
-  Dielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {}
+  Dielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {
+    reads_.direction = false;  // two Dirac lobes, chosen by uComponent
+  }
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }

@@ -9,7 +9,7 @@ namespace {
 
 class Diffuse final : public Bsdf {
  public:
-  explicit Diffuse(TexturePtr rho) : rho_(std::move(rho)) {}
+  explicit Diffuse(TexturePtr rho) : rho_(std::move(rho)) { reads_.component = false; }
 
   Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);

@@ -16,7 +16,9 @@ namespace {
 class RoughConductor final : public Bsdf {
  public:
   RoughConductor(MicrofacetType t, float alpha, TexturePtr alphaTex, Color eta, Color k, bool mirror, TexturePtr r)
-      : mf_(t, alpha), alphaTex_(std::move(alphaTex)), eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {}
+      : mf_(t, alpha), alphaTex_(std::move(alphaTex)), eta_(eta), k_(k), mirror_(mirror), specR_(std::move(r)) {
+    reads_.component = false;
+  }
 
   Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     if (wo.z <= 0 || wi.z <= 0) return Color(0.0f);

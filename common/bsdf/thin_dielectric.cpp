@@ -16,7 +16,9 @@ Color colorMax(const Color& a, const Color& b) { return {std::fmax(a.r, b.r), st
 // reflections gives R' = R + T^2 R / (1 - R^2) and T' = 1 - R', with transmission straight through.
 class ThinDielectric final : public Bsdf {
  public:
-  ThinDielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {}
+  ThinDielectric(float eta, TexturePtr r, TexturePtr t) : eta_(eta), specR_(std::move(r)), specT_(std::move(t)) {
+    reads_.direction = false;  // two Dirac lobes, chosen by uComponent
+  }
 
   Color eval(const Vec3&, const Vec3&, const BsdfQuery&) const override { return Color(0.0f); }
   float pdf(const Vec3&, const Vec3&, const BsdfQuery&) const override { return 0; }

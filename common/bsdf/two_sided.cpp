@@ -9,7 +9,7 @@ namespace {
 // the front. Transmissive BSDFs are rejected by makeBsdf (as Mitsuba does).
 class TwoSided final : public Bsdf {
  public:
-  explicit TwoSided(std::unique_ptr<Bsdf> nested) : nested_(std::move(nested)) {}
+  explicit TwoSided(std::unique_ptr<Bsdf> nested) : nested_(std::move(nested)) { reads_ = nested_->reads(); }
 
   Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const override {
     return wo.z < 0 ? nested_->eval(flip(wo), flip(wi), q) : nested_->eval(wo, wi, q);

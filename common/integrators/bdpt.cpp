@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/core/sampling.h"
+#include "common/integrators/bsdf_numbers.h"
 #include "common/render/render_scene.h"
 
 namespace mlt {
@@ -59,12 +60,10 @@ int randomWalk(const RenderScene& scene, SampleSource& source, Ray ray, Color be
     if (added + 1 >= maxVertices) break;
 
     // Sample the next direction (the vertex's fixed block: component, direction, roulette).
-    source.seek(blockBase + bounce * kBsdfDims);
-    const float uComponent = source.next1D();
-    const Vec2 uDir = source.next2D();
+    const BsdfNumbers u = readBsdfNumbers(source, blockBase + bounce * kBsdfDims, v.bsdf->reads());
     const Frame frame(v.ns);
     const Vec3 woL = frame.toLocal(v.wo);
-    const std::optional<BsdfSample> bs = v.bsdf->sample(woL, uComponent, uDir, BsdfQuery{v.uv, mode});
+    const std::optional<BsdfSample> bs = v.bsdf->sample(woL, u.uComponent, u.uDir, BsdfQuery{v.uv, mode});
     if (!bs || bs->f.isBlack() || !(bs->pdfW > 0)) break;
     const Vec3 wi = frame.toWorld(bs->wi);
     Color scatter = bs->f * (std::fabs(bs->wi.z) / bs->pdfW);

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/core/sampling.h"
+#include "common/integrators/bsdf_numbers.h"
 #include "common/render/render_scene.h"
 
 namespace mlt {
@@ -102,10 +103,8 @@ Color PathTracer::Li(SampleSource& source, const Vec2* pixel, Vec2* pRaster) con
 
     // BSDF sampling (Camera stream, the vertex's block).
     source.startStream(Stream::Camera);
-    source.seek(kCameraDims + bounce * kBsdfDims);
-    const float uComponent = source.next1D();
-    const Vec2 uDir = source.next2D();
-    const std::optional<BsdfSample> bs = bsdf.sample(woL, uComponent, uDir, query);
+    const BsdfNumbers u = readBsdfNumbers(source, kCameraDims + bounce * kBsdfDims, bsdf.reads());
+    const std::optional<BsdfSample> bs = bsdf.sample(woL, u.uComponent, u.uDir, query);
     if (!bs || bs->f.isBlack() || !(bs->pdfW > 0)) break;
     beta *= bs->f * (std::fabs(bs->wi.z) / bs->pdfW);
     etaScale *= bs->eta * bs->eta;

@@ -51,15 +51,28 @@ inline bool sameDeltaDirection(const Vec3& a, const Vec3& b) {
   return dot(a, b) >= (1 - kDeltaDirectionTolerance) * std::sqrt(dot(a, a) * dot(b, b));
 }
 
+// Which of sample()'s numbers a BSDF reads: a single lobe needs no uComponent, a Dirac lobe (a mirror,
+// smooth glass) no uDir. The path samplers read only these (readBsdfNumbers, integrators/bsdf_numbers.h),
+// so a Markov chain over primary samples neither mutates nor backs up numbers no path depends on; the
+// block layout of the sample vector (sampler/sample_source.h) is the same either way.
+struct BsdfReads {
+  bool component = true;  // uComponent
+  bool direction = true;  // uDir
+};
+
 class Bsdf {
  public:
   virtual ~Bsdf() = default;
+  // sample() returns the same for any value of a number this says it does not read (bsdf_test:
+  // BsdfReads.UnreadNumbersDoNotChangeTheSample).
+  BsdfReads reads() const { return reads_; }
   // f(wo, wi) of the non-delta components; 0 when only delta components could connect the two.
   virtual Color eval(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const = 0;
   // Solid-angle density with which sample() produces wi given wo, non-delta components only
   // (including the probability of choosing those components).
   virtual float pdf(const Vec3& wo, const Vec3& wi, const BsdfQuery& q) const = 0;
-  // Consumes exactly kBsdfDims - 1 = 3 numbers: uComponent then uDir (2D). nullopt = absorbed.
+  // Takes kBsdfDims - 1 = 3 numbers: uComponent then uDir (2D), of which it reads those reads() names.
+  // nullopt = absorbed.
   virtual std::optional<BsdfSample> sample(const Vec3& wo, float uComponent, Vec2 uDir, const BsdfQuery& q) const = 0;
   // Inverse of sample(): the primary numbers that produce wi given wo, or nullopt when this BSDF has no
   // inverse (the default) or sample() cannot produce wi. gamma.pick chooses the component by T(t) of
@@ -75,6 +88,9 @@ class Bsdf {
   virtual bool isDelta() const = 0;
   // Hemispherical albedo estimate for the given wo, used for Russian roulette hints only.
   virtual Color albedo(const Vec2& uv) const = 0;
+
+ protected:
+  BsdfReads reads_;  // set by the constructor of a BSDF that reads fewer than all three
 };
 
 // Shading-normal correction for importance transport (Veach 1997, eq. 5.19):

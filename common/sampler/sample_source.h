@@ -11,6 +11,7 @@
 //                     [2,3] lens position
 //                     then per camera-subpath bounce i (i = 0, 1, ...): kBsdfDims numbers
 //                       [0] component choice, [1,2] direction, [3] Russian roulette
+//                       ([0] and [1,2] read only where the vertex's BSDF reads them: Bsdf::reads)
 //   Stream::Light   : [0] light choice, [1,2] position on the light, [3,4] emitted direction
 //                     then per light-subpath bounce: kBsdfDims numbers as above
 //   Stream::Connect : technique-level choices: [0] MMLT's (s,t) technique choice (kConnectTechniqueDim),
