@@ -23,6 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from charts import mean_std  # noqa: E402  (the charts' mean and sample standard deviation)
 
 HARD_SCENES = ("caustic-mirror", "door-ajar", "glossy-plates")
+TIME_OFF = 0.05  # a point whose mean run time is further than this from its budget shows that time
 CHAIN_METHODS = ("pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt", "veach-mlt")
 
 
@@ -185,7 +186,10 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
         lines.append("")
     lines.append("![relMSE against time, %s](%s/error_time_%s.png)" % (scene, out_rel, scene))
     lines.append("")
-    lines.append("relMSE, mean +- std over runs (runs); lower is better; **bold** = best at that budget.")
+    lines.append("relMSE, mean +- std over runs (runs); lower is better; **bold** = best at that budget. Where a "
+                 "point's runs took on average more than %d%% more or less than its budget (the host's speed "
+                 "drifting under the harness's time model), the mean time follows the count: at equal time a "
+                 "method that ran longer is flattered." % round(100 * TIME_OFF))
     lines.append("")
     lines.append("| method | " + " | ".join("%g s" % b for b in budgets) + " |")
     lines.append("|---|" + "---|" * len(budgets))
@@ -201,7 +205,9 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
                 cells.append("-")
                 continue
             mu, sd = g[(m, b)].rel_ms()
-            cell = "%s +- %s (%d)" % (fmt_e(mu), fmt_e(sd), len(g[(m, b)].rel))
+            t = sum(g[(m, b)].seconds) / len(g[(m, b)].seconds)
+            took = ", %.1f s" % t if abs(t / b - 1) > TIME_OFF else ""
+            cell = "%s +- %s (%d%s)" % (fmt_e(mu), fmt_e(sd), len(g[(m, b)].rel), took)
             cells.append("**%s**" % cell if best.get(b) == m else cell)
         lines.append("| %s | %s |" % (m, " | ".join(cells)))
     lines.append("")
