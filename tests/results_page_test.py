@@ -18,7 +18,8 @@ FIELDS = ("scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,r
 
 def run_row(scene, method, bi, budget, run, rel, mean_err, plan="", seconds=None):
     return dict(scene=scene, method=method, mode="local", budget_index=bi, budget=budget, run=run, seed=run + 1,
-                seconds=budget if seconds is None else seconds, work=100, samples=int(1e6 * budget), relMSE=rel, MSE=rel, MAE=rel,
+                seconds=budget if seconds is None else seconds, work=100, samples=int(1e6 * budget), relMSE=rel,
+                MSE=rel, MAE=rel,
                 meanErr=mean_err, acceptance="0.5" if "mlt" in method else "", chains=4 if "mlt" in method else 0,
                 stuck_chains=0, non_finite=0, flags="", plan_seconds=plan)
 

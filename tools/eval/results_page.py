@@ -15,6 +15,7 @@ import argparse
 import csv
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 from collections import OrderedDict, defaultdict
@@ -145,6 +146,9 @@ class Group:
     def rel_ms(self):
         return mean_std(self.rel)
 
+    def mean_seconds(self):  # wall time of a run, bootstrap included
+        return sum(self.seconds) / len(self.seconds)
+
     def throughput(self):  # samples or mutations per second of wall time (bootstrap included)
         return sum(self.samples) / sum(self.seconds)
 
@@ -205,7 +209,7 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
                 cells.append("-")
                 continue
             mu, sd = g[(m, b)].rel_ms()
-            t = sum(g[(m, b)].seconds) / len(g[(m, b)].seconds)
+            t = g[(m, b)].mean_seconds()
             took = ", %.1f s" % t if abs(t / b - 1) > TIME_OFF else ""
             cell = "%s +- %s (%d%s)" % (fmt_e(mu), fmt_e(sd), len(g[(m, b)].rel), took)
             cells.append("**%s**" % cell if best.get(b) == m else cell)
@@ -270,18 +274,16 @@ def targets_section(all_groups, refs, budgets):
             x = g[(m, 16.0)]
             mu, sd = mean_std(x.mean_err)
             n = len(x.mean_err)
-            se_mu = sd / n ** 0.5 if n > 1 else float("nan")
-            srt = sorted(x.mean_err)
-            median = srt[n // 2] if n % 2 else 0.5 * (srt[n // 2 - 1] + srt[n // 2])
             worst = max(x.mean_err, key=abs)
             ok = abs(mu) <= 0.001 + 2 * se and abs(worst) <= 0.003 + 2 * se
+            se_cell, beyond = "-", "-"  # one run has no spread to judge by
             if n > 1:
-                biased = "yes" if abs(mu) > 2 * (se_mu ** 2 + se ** 2) ** 0.5 else "no"
-            else:
-                biased = "-"
+                se_mu = sd / n ** 0.5
+                se_cell = "%.2f%%" % (100 * se_mu)
+                beyond = "yes" if abs(mu) > 2 * (se_mu ** 2 + se ** 2) ** 0.5 else "no"
             lines.append("| %s | %s | %s | %s | %s | %s | %.3f%% | %s | %s |" % (
-                scene, m, pct(mu), "%.2f%%" % (100 * se_mu) if n > 1 else "-", pct(median), pct(worst), 100 * se,
-                biased, "yes" if ok else "no"))
+                scene, m, pct(mu), se_cell, pct(statistics.median(x.mean_err)), pct(worst), 100 * se, beyond,
+                "yes" if ok else "no"))
     lines.append("")
     # 2. mmlt vs bdpt on the Cornell box.
     if "cornell-box" in all_groups:
