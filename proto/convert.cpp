@@ -259,6 +259,15 @@ v1::JobPlan toProto(const JobPlan& plan) {
     n->set_direct_share(plan.norm.directShare);
     if (plan.norm.directCv >= 0) n->set_direct_cv(plan.norm.directCv);  // absent: the share alone decided
   }
+  if (const ImportanceMap& m = plan.norm.importance; !m.empty()) {
+    auto* i = n->mutable_importance();
+    i->set_film_width(m.filmWidth);
+    i->set_film_height(m.filmHeight);
+    i->set_tile_size(m.tileSize);
+    i->set_tiles_x(m.tilesX);
+    i->set_tiles_y(m.tilesY);
+    i->mutable_h()->Add(m.h.begin(), m.h.end());
+  }
   for (const BootstrapEstimate& e : plan.norm.bootstrapB) {
     auto* p = n->add_bootstrap_b();
     p->set_n(e.n);
@@ -306,6 +315,24 @@ JobPlan fromProto(const v1::JobPlan& p) {
       throw WireError("plan.norm.direct_cv", fmt::format("invalid value {}", n.direct_cv()));
     plan.norm.directShare = n.direct_share();
     plan.norm.directCv = n.has_direct_cv() ? n.direct_cv() : -1;
+  }
+  if (n.has_importance() && n.importance().h_size() > 0) {
+    const auto& i = n.importance();
+    ImportanceMap& m = plan.norm.importance;
+    m.filmWidth = i.film_width();
+    m.filmHeight = i.film_height();
+    m.tileSize = i.tile_size();
+    m.tilesX = i.tiles_x();
+    m.tilesY = i.tiles_y();
+    m.h.assign(i.h().begin(), i.h().end());
+    try {
+      validateImportanceMap(m, "the map");
+    } catch (const std::invalid_argument& e) {
+      throw WireError("plan.norm.importance", e.what());
+    }
+    if (m.filmWidth != plan.settings.width || m.filmHeight != plan.settings.height)
+      throw WireError("plan.norm.importance", fmt::format("a map of a {}x{} film in a plan of {}x{}", m.filmWidth,
+                                                          m.filmHeight, plan.settings.width, plan.settings.height));
   }
   for (const auto& e : n.bootstrap_b()) {
     for (double v : {e.b(), e.std_err(), e.sample_var(), e.bulk_b(), e.bulk_std_err(), e.bulk_var(), e.excess_mean_sq()})

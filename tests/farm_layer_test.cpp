@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <random>
 
@@ -254,6 +255,36 @@ TEST(FarmLayer, ThePilotsShareAndAnUnmeasuredCvTravelWithThePlan) {
     p.mutable_norm()->set_direct_cv(bad);
     EXPECT_THROW(wire::fromProto(p), std::exception) << bad;
   }
+}
+
+// The relative target's importance map travels with the plan bit for bit (every chain's target reads it),
+// and a map that does not fit the plan's film or holds a value that is not a positive finite number is
+// refused, naming the field.
+TEST(FarmLayer, TheImportanceMapTravelsWithThePlanAndABadOneIsRefused) {
+  JobPlan plan = chainPlan(8, 6, 4, 16);
+  plan.settings.mutationsPerPixel = 1;
+  EXPECT_FALSE(wire::toProto(plan).norm().has_importance());  // no map: nothing sent
+  std::vector<double> sums(48);
+  for (size_t i = 0; i < sums.size(); ++i) sums[i] = 0.25 * double(i % 7);
+  plan.norm.importance = importanceFromTileSums(8, 6, sums, std::vector<uint64_t>(48, 1), 0.5);
+  ASSERT_FALSE(plan.norm.importance.empty());
+  const JobPlan back = wire::parseJobPlan(wire::jobPlanBytes(plan));
+  EXPECT_EQ(back.norm.importance, plan.norm.importance);
+  const auto refused = [&](const std::function<void(v1::ImportanceMap&)>& edit, const char* what) {
+    v1::JobPlan p = wire::toProto(plan);
+    edit(*p.mutable_norm()->mutable_importance());
+    try {
+      wire::fromProto(p);
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const wire::WireError& e) {
+      EXPECT_EQ(e.field(), "plan.norm.importance") << what;
+    }
+  };
+  refused([](v1::ImportanceMap& m) { m.set_h(3, std::numeric_limits<float>::quiet_NaN()); }, "NaN");
+  refused([](v1::ImportanceMap& m) { m.set_h(0, 0.0f); }, "zero");
+  refused([](v1::ImportanceMap& m) { m.mutable_h()->RemoveLast(); }, "a value short");
+  refused([](v1::ImportanceMap& m) { m.set_tile_size(2); }, "another tile size");
+  refused([](v1::ImportanceMap& m) { m.set_film_width(16); }, "another film");
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // The Markov chain methods agree with bdpt on the bundled scenes themselves (scenes/*.xml through the
-// Mitsuba front end), at a small resolution: image mean and 3x3 tile means of R independent job seeds
+// Mitsuba front end), at a small resolution, with their default target (luminance) and once with the
+// relative one (common/mlt/importance.h; more chains and mutations: its image mean also carries where the
+// chains are, see docs/CHAINS.md): image mean and 3x3 tile means of R independent job seeds
 // (bootstrap included) against a long bdpt estimate, within kZ combined standard errors.
 // With t(R - 1 = 11 dof) tails, P(|t| > 5) ~ 4e-4 per entry, ~2% over the ~60 entries here (fixed seeds).
 #include <gtest/gtest.h>
@@ -10,6 +12,7 @@
 #include <string>
 
 #include "common/integrators/evaluators.h"
+#include "common/methods/pss_method.h"
 #include "common/render/render_scene.h"
 #include "common/scene/mitsuba_loader.h"
 #include "tests/support/estimates.h"
@@ -26,10 +29,12 @@ struct Case {
   std::string method;
   double mutationsPerPixel;
   double power;  // relative image-mean error the comparison must resolve
+  const char* target = kDefaultTarget;  // the chains' target (method parameter "target")
+  int chains = 16;
 };
 
 // Readable test names in ctest (instead of the bytes of the struct).
-void PrintTo(const Case& c, std::ostream* os) { *os << c.scene << " " << c.method.c_str(); }
+void PrintTo(const Case& c, std::ostream* os) { *os << c.scene << " " << c.method.c_str() << " " << c.target; }
 
 class MltBundled : public ::testing::TestWithParam<Case> {};
 
@@ -46,7 +51,8 @@ TEST_P(MltBundled, AgreesWithBdpt) {
   s.integrator.rrDepth = desc.rrDepth.value_or(5);
   s.mutationsPerPixel = c.mutationsPerPixel;
   s.bootstrapSamples = 40000;
-  s.chains = 16;
+  s.chains = c.chains;
+  s.params["target"] = c.target;
   const test::ImageStats mlt = test::markovChainStats(*scene, s, kRes, kRes, kRuns, kTiles);
 
   const auto bdpt = makeEvaluator(*scene, "bdpt", s.integrator);
@@ -66,10 +72,12 @@ INSTANTIATE_TEST_SUITE_P(Scenes, MltBundled,
                                            Case{"cornell-box.xml", "mmlt", 32, 0.08},
                                            Case{"cornell-spheres.xml", "mmlt", 32, 0.10},
                                            Case{"caustic-mirror.xml", "pssmlt", 32, 0.10},
-                                           Case{"door-ajar.xml", "mmlt", 32, 0.10}),
+                                           Case{"door-ajar.xml", "mmlt", 32, 0.10},
+                                           Case{"cornell-box.xml", "mmlt", 128, 0.08, "relative", 256}),
                          [](const ::testing::TestParamInfo<Case>& info) {
                            std::string n = std::string(info.param.scene) + "_" + info.param.method.c_str();
                            n = n.substr(0, n.find('.')) + "_" + info.param.method.c_str();
+                           if (std::string(info.param.target) != kDefaultTarget) n += std::string("_") + info.param.target;
                            for (char& ch : n)
                              if (ch == '-') ch = '_';
                            return n;

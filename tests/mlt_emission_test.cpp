@@ -179,8 +179,8 @@ TEST(EmissionEstimate, SpendsItsRaysOnTheLightsOutline) {
 
 TEST(EmissionEstimate, SameSeedSameBitsForAnyThreadCount) {
   const RenderSettings s = settings("mmlt", 4);
-  const EmissionEstimate a = emissionEstimate(cornell(), s, true);
-  const EmissionEstimate b = emissionEstimate(cornell(), s, false);
+  const EmissionEstimate a = emissionEstimate(cornell(), s, nullptr, true);
+  const EmissionEstimate b = emissionEstimate(cornell(), s, nullptr, false);
   EXPECT_EQ(std::memcmp(&a.estimate.b, &b.estimate.b, sizeof(double)), 0);
   EXPECT_EQ(std::memcmp(&a.estimate.stdErr, &b.estimate.stdErr, sizeof(double)), 0);
   EXPECT_EQ(a.rays, b.rays);

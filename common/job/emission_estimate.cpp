@@ -102,7 +102,8 @@ std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* 
   return marked;
 }
 
-EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, bool parallel) {
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, const ImportanceMap* importance,
+                                  bool parallel) {
   const int W = scene.camera().width(), H = scene.camera().height();  // the film
   if (W <= 0 || H <= 0) throw std::invalid_argument("emission estimate: empty film");
   IntegratorSettings oneSegment = s.integrator;
@@ -194,8 +195,11 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
         }
         m[r] = sum / double(half);
       }
-      sumMean += 0.5 * (m[0] + m[1]);
-      sumVar += 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4 = Var((m_0 + m_1) / 2)
+      const double h = importance && !importance->empty()
+                           ? double(importance->at(Vec2{float(x / G) + 0.5f, float(y / G) + 0.5f}))
+                           : 1.0;
+      sumMean += h * 0.5 * (m[0] + m[1]);
+      sumVar += h * h * 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4 = Var((m_0 + m_1) / 2)
     }
     rowMean[size_t(y)] = sumMean;
     rowVar[size_t(y)] = sumVar;

@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/mlt/importance.h"
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
 
@@ -102,6 +103,10 @@ std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* 
 // large steps of length 1 are summed whole too). Its sampleVar and bulkVar are left 0 for the caller: the
 // variance of c_1 per uniform sample (the candidates', which run after this pilot decided whether they
 // only seed chains) is what a large step of length 1 has and what combineB weighs the large steps by.
-EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings, bool parallel = true);
+// importance (optional, the relative target's map, common/mlt/importance.h): b_1 of that target,
+// (1/P) sum_j h_j I_j, each cell's estimate weighted by its pixel's h (the pilot's decisions read the
+// unweighted rays).
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings,
+                                  const ImportanceMap* importance = nullptr, bool parallel = true);
 
 }  // namespace mlt

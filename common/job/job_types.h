@@ -16,6 +16,7 @@
 #include "common/film/film.h"
 #include "common/film/sparse_splats.h"
 #include "common/integrators/path_evaluator.h"
+#include "common/mlt/importance.h"
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
 
@@ -48,6 +49,9 @@ struct Normalization {
   // common/job/direct_light_rule.h): its share and CV; -1 where no pilot ran (the CV also where the share
   // alone decided).
   double directShare = -1, directCv = -1;
+  // The relative target's importance map (common/mlt/importance.h (R2)), which every chain's target reads;
+  // empty: the target is the path's luminance.
+  ImportanceMap importance;
   // The b a chain of `slot` weights Kelemen MIS splats with, and its large-step layer is developed with
   // (mlt/develop.h (D7)): the bootstrap's b_k (mmlt, rjmlt) or b.
   double weightB(size_t slot) const { return bk.empty() ? b : (slot < bk.size() ? bk[slot] : 0.0); }

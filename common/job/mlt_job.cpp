@@ -160,6 +160,8 @@ void checkBootstrapFits(const ChainJobSpec& spec, const RenderSettings& b, const
   if (b.integrator.heuristic != s.integrator.heuristic)
     differs("MIS heuristic", int(b.integrator.heuristic), int(s.integrator.heuristic));
   if (b.directLight != s.directLight) differs("directLight", directLightName(b.directLight), directLightName(s.directLight));
+  if (spec.importanceFloor(b) != spec.importanceFloor(s))
+    differs("the relative target's floor", spec.importanceFloor(b), spec.importanceFloor(s));
   if (bootstrapPerLength(spec, b) != bootstrapPerLength(spec, s))
     differs("bootstrap samples per length", bootstrapPerLength(spec, b), bootstrapPerLength(spec, s));
 }
@@ -211,8 +213,13 @@ namespace {
 bool sameRaysInputs(const RenderSettings& e, const RenderSettings& s) {
   return e.seed == s.seed && e.width == s.width && e.height == s.height && e.integrator == s.integrator;
 }
-bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s) {
-  return earlier && earlier->emission && sameRaysInputs(earlier->settings, s);
+// The importance pilot's inputs are the rays' and its floor (importance_pilot.h); b_1's rays read its map.
+bool importanceReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s, double floor) {
+  return earlier && earlier->importance && sameRaysInputs(earlier->settings, s) && earlier->importance->floor == floor;
+}
+bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s, double floor) {
+  const bool sameMap = floor > 0 ? importanceReusable(earlier, s, floor) : !(earlier && earlier->importance);
+  return earlier && earlier->emission && sameRaysInputs(earlier->settings, s) && sameMap;
 }
 }  // namespace
 
@@ -281,6 +288,25 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     if (out.pilot) out.result.seconds = out.pilot->seconds;
     return out;
   }
+  // The relative target's map (importance.h), before any candidate: their c reads it.
+  const double floor = spec.importanceFloor(s);
+  if (floor > 0) {
+    if (importanceReusable(earlier, s, floor)) {
+      out.importance = earlier->importance;
+      out.importance->seconds = 0;  // not traced again
+    } else {
+      out.importance = importancePilot(scene, s, floor);
+    }
+    spdlog::info("{}: relative target (floor {:g} of the mean): {} from {} pt samples ({})", spec.name(), floor,
+                 out.importance->map.empty()
+                     ? std::string("no light seen, so the luminance target")
+                     : fmt::format("an importance map of {}x{} tiles of {} pixels", out.importance->map.tilesX,
+                                   out.importance->map.tilesY, out.importance->map.tileSize),
+                 out.importance->samples,
+                 out.importance->seconds > 0 ? fmt::format("{:.3f} s", out.importance->seconds)
+                                             : std::string("an earlier bootstrap's, not traced again"));
+  }
+  const ImportanceMap* importance = out.importance && !out.importance->map.empty() ? &out.importance->map : nullptr;
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
@@ -295,13 +321,14 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   }
   const uint64_t seed = s.seed;
   const int width = s.width, height = s.height;
-  const BinnedCandidateFnFactory candidates = [&spec, &scene, &s, seed, width, height]() -> BinnedCandidateFn {
+  const BinnedCandidateFnFactory candidates = [&spec, &scene, &s, seed, width, height,
+                                                importance]() -> BinnedCandidateFn {
     std::shared_ptr<PssTarget> target = spec.makeTarget(scene, s);
     auto path = std::make_shared<PathContribution>();
-    return [target, path, seed, width, height](uint64_t index, int k, CandidateInfo* info) {
+    return [target, path, seed, width, height, importance](uint64_t index, int k, CandidateInfo* info) {
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
-      const double c = targetFunction(*path);
+      const double c = targetFunction(*path, importance);
       // mmlt: one splat per path; its allocation bin (pssmlt's single length needs none).
       if (c > 0 && !path->splats.empty()) info->bin = allocationBin(path->splats[0].pRaster, width, height);
       info->work = source.reads();
@@ -314,12 +341,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   const bool lengthOne = spec.chainsPerLength() && lengths.front() == 1;
   std::optional<EmissionEstimate> e1;
   double raySeconds = 0;
-  const bool reused = lengthOne && emissionReusable(earlier, s);
+  const bool reused = lengthOne && emissionReusable(earlier, s, floor);
   if (reused) {
     e1 = earlier->emission;  // the same rays' result: not traced again (raySeconds stays 0)
   } else if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
-    e1 = emissionEstimate(scene, s);
+    e1 = emissionEstimate(scene, s, importance);
     raySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   out.emission = e1;
@@ -332,8 +359,10 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   // off by +79% and the others' by -22 to -30% in a run at 240 mutations per pixel).
   if (raysForLengthOne && e1->smallLights == 0) bc.seedOnlyLengths = {1};
   if (e1 && bc.totalCandidates > 0) bc.spentCost = double(e1->rays) * kEmissionRayCost;  // the rays share the budget
+  if (out.importance && bc.totalCandidates > 0) bc.spentCost += out.importance->cost;   // and the importance pilot
   out.result = runBinnedBootstrap(bc, candidates);
   if (out.pilot) out.result.seconds += out.pilot->seconds;  // the pilot is part of the bootstrap's cost
+  if (out.importance) out.result.seconds += out.importance->seconds;
   if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
     LengthBootstrap& l1 = out.result.lengths.front();
@@ -459,6 +488,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     norm.directCv = bootstrap.pilot->cv;
   }
   norm.totalMutations = boot.b > 0 ? M : 0;
+  if (bootstrap.importance) norm.importance = bootstrap.importance->map;
 
   // ---- chain allocation: mutations M_k and chains C_k by mutationWeights (common/mlt/allocation.h; the plain rule,
   // proportional to b_k, for one length), largest remainder ----
@@ -568,7 +598,8 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   // Replay the start candidate (iteration 0 of the source reads IndependentSource(seed, candidate)).
   PathContribution current, scratch;
   target->evaluate(source, k, current);
-  const double c0 = targetFunction(current);
+  const ImportanceMap* importance = norm.importance.empty() ? nullptr : &norm.importance;
+  const double c0 = targetFunction(current, importance);
   if (!(std::fabs(c0 - unit.startContribution) <= kReplayTolerance * std::fabs(unit.startContribution)) || !(c0 > 0))
     throw std::runtime_error(fmt::format(
         "chain replay mismatch: job seed {}, chain {}, candidate {}, path length {}: bootstrap recorded c = {:.17g}, "
@@ -595,6 +626,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   config.b = bChain;
   config.tau = plan.norm.tailThreshold(size_t(slot));
   config.stratifyLargeSteps = stratify;
+  config.importance = importance;
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 

@@ -11,6 +11,7 @@
 
 #include "common/job/direct_light_rule.h"
 #include "common/job/emission_estimate.h"
+#include "common/job/importance_pilot.h"
 #include "common/job/job_types.h"
 #include "common/mlt/allocation.h"
 #include "common/mlt/bootstrap.h"
@@ -77,6 +78,13 @@ class ChainJobSpec {
     (void)settings;
     return std::nullopt;
   }
+  // The relative target's floor kappa (common/mlt/importance.h (R2)): > 0, the bootstrap makes an importance
+  // map by a pilot (importance_pilot.h) and the target weights each splat's luminance by it; 0 (the
+  // default), the target is the path's luminance. veach-mlt keeps 0: its chains compute their own target.
+  virtual double importanceFloor(const RenderSettings& settings) const {
+    (void)settings;
+    return 0;
+  }
 };
 
 // The shortest path length a per-length method's chains cover: 1, or directPassSegments + 1 when the
@@ -102,6 +110,10 @@ struct MarkovChainBootstrap {
   // with spp 0: the pilot whose share sizes the pass (directSppPerMutation). Also a pure function of the
   // scene, the seed, the film and the integrator settings, so a second bootstrap takes it.
   std::optional<DirectLightPilot> pilot;
+  // The relative target's pilot and map (ChainJobSpec::importanceFloor > 0), which the candidates' c and the
+  // chains' target read; a pure function of the scene, the seed, the film, the integrator settings and the
+  // floor, so a second bootstrap takes it. Its cost shares the bootstrap's budget (BootstrapConfig::spentCost).
+  std::optional<ImportancePilot> importance;
 };
 
 // Bootstrap sizing. The bootstrap finds start states, allocates chains to path lengths and gives the

@@ -14,6 +14,29 @@ std::unique_ptr<ChainState> PrimarySampleChainMethod::makeState(KelemenSource& s
   return std::make_unique<PssState>(source);
 }
 
+std::vector<ParamSpec> PrimarySampleChainMethod::params() const {
+  ParamSpec target;
+  target.name = "target";
+  target.type = ParamSpec::Type::Choice;
+  target.defaultValue = kDefaultTarget;
+  target.help = "the chains' target: relative (luminance over a pilot's estimate of the pixel's brightness: mutations "
+                "where the relative error is, common/mlt/importance.h) or luminance (Veach's and Kelemen's)";
+  target.choices = {"relative", "luminance"};
+  ParamSpec floor;
+  floor.name = "target-floor";
+  floor.type = ParamSpec::Type::Double;
+  floor.defaultValue = kDefaultTargetFloor;
+  floor.help = "relative target: pixels darker than this fraction of the image's mean brightness get mutations in "
+               "proportion to their brightness, brighter ones alike";
+  floor.min = 1e-3;
+  floor.max = 1e3;
+  return {target, floor};
+}
+
+double PrimarySampleChainMethod::importanceFloor(const RenderSettings& s) const {
+  return paramText(s, "target") == "relative" ? param(s, "target-floor") : 0.0;
+}
+
 void PrimarySampleChainMethod::validate(const RenderSettings& s) const {
   RenderMethod::validate(s);
   validateChainWorkSettings(s);
@@ -36,6 +59,13 @@ std::vector<Color> PrimarySampleChainMethod::develop(const JobPlan& plan, const 
 
 void PrimarySampleChainMethod::addMetadata(const JobPlan& plan, const PartialResult& merged, ImageMetadata& m) const {
   addChainMetadata(makeChainReport(plan, merged), m);  // includes the chain settings (largeStepProb, ...)
+  // The target (importance.h): its name, the relative one's floor and its map's tile size (no map: the pilot
+  // saw no light, and the target was luminance).
+  m.strings["target"] = paramText(plan.settings, "target");
+  if (const double floor = importanceFloor(plan.settings); floor > 0) {
+    m.numbers["targetFloor"] = floor;
+    m.numbers["importanceTileSize"] = plan.norm.importance.empty() ? 0 : plan.norm.importance.tileSize;
+  }
 }
 
 const PrimarySampleChainMethod* findPrimarySampleChainMethod(const std::string& name) {

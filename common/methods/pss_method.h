@@ -16,12 +16,20 @@ namespace mlt {
 
 class PathEvaluator;
 
+// The target's defaults (params "target", "target-floor"; docs/CHAINS.md, "A relative target": measured).
+inline constexpr const char* kDefaultTarget = "luminance";
+inline constexpr const char* kDefaultTargetFloor = "0.5";
+
 class PrimarySampleChainMethod : public RenderMethod, public ChainJobSpec {
  public:
   std::string name() const override = 0;
   MethodFamily family() const final { return MethodFamily::MarkovChain; }
   std::vector<std::string> mutationKinds() const override { return {"large", "small"}; }  // index = MutationType
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
+  // The target (common/mlt/importance.h): "target" relative (the default) or luminance, and "target-floor"
+  // kappa of the relative one. A method with parameters of its own appends them to these.
+  std::vector<ParamSpec> params() const override;
+  double importanceFloor(const RenderSettings& settings) const override;
 
   void validate(const RenderSettings& settings) const override;
   JobPlan plan(const RenderScene& scene, const RenderSettings& settings) const override;

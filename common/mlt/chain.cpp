@@ -33,7 +33,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     const Proposal p = state.propose();
     y->clear();
     target.evaluate(*y);
-    const double cy = targetFunction(*y);
+    const double cy = targetFunction(*y, config.importance);
     double ratio = p.tRatio * cy / cx;
     if (config.acceptancePower != 1) ratio = std::pow(ratio, config.acceptancePower);
     const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);

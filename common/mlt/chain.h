@@ -36,6 +36,7 @@
 #include "common/core/rng.h"
 #include "common/core/vec.h"
 #include "common/integrators/path_evaluator.h"
+#include "common/mlt/importance.h"
 #include "common/mlt/kelemen_source.h"
 #include "common/mlt/target_sums.h"
 
@@ -97,6 +98,9 @@ struct ChainConfig {
   // Post-stratify the large steps (develop.h (D6)): pass each one's bulk and ChainState::stratumPoint to
   // ChainSink::stratumSample.
   bool stratifyLargeSteps = false;
+  // The target's importance map (importance.h (R2)); null: c is the path's luminance. The start state's
+  // c (runChain's cx) must have been computed with the same map.
+  const ImportanceMap* importance = nullptr;
   // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
   // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
   double acceptancePower = 1;

@@ -50,17 +50,35 @@ MethodSpec parseMethodSpec(const std::string& spec) {
     rest = rest.substr(0, star);
   }
   if (m.label.empty()) m.label = rest;
-  for (const auto& [suffix, direct] : {std::pair<std::string, DirectLight>{"+separate-direct", DirectLight::Separate},
-                                       {"+direct-in-chains", DirectLight::Chains}}) {
-    if (rest.size() <= suffix.size() || !rest.ends_with(suffix)) continue;
-    rest.resize(rest.size() - suffix.size());
-    m.directLight = direct;
-    const ChainJobSpec* chain = findChainJobSpec(rest);
-    if (!chain || !chain->allowsSeparateDirect())
-      throw std::invalid_argument("method spec '" + spec + "': " + rest + " cannot render the direct light apart");
-    break;
+  // method[+modifier]...: separate-direct, direct-in-chains, or a method parameter name:value.
+  std::vector<std::string> parts;
+  for (size_t from = 0;;) {
+    const size_t plus = rest.find('+', from);
+    parts.push_back(rest.substr(from, plus == std::string::npos ? std::string::npos : plus - from));
+    if (plus == std::string::npos) break;
+    from = plus + 1;
   }
-  m.method = findMethod(rest).name();
+  m.method = findMethod(parts.front()).name();
+  for (size_t i = 1; i < parts.size(); ++i) {
+    const std::string& mod = parts[i];
+    if (mod == "separate-direct" || mod == "direct-in-chains") {
+      const ChainJobSpec* chain = findChainJobSpec(m.method);
+      if (!chain || !chain->allowsSeparateDirect())
+        throw std::invalid_argument("method spec '" + spec + "': " + m.method + " cannot render the direct light apart");
+      m.directLight = mod == "separate-direct" ? DirectLight::Separate : DirectLight::Chains;
+      continue;
+    }
+    const size_t colon = mod.find(':');
+    if (colon == std::string::npos || colon == 0)
+      throw std::invalid_argument("method spec '" + spec + "': '+" + mod +
+                                  "' is neither separate-direct, direct-in-chains nor a parameter name:value");
+    m.params[mod.substr(0, colon)] = mod.substr(colon + 1);
+  }
+  try {
+    findMethod(m.method).checkParams(m.params);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("method spec '" + spec + "': " + e.what());
+  }
   return m;
 }
 
@@ -169,6 +187,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   RenderSettings settings = base;
   settings.method = ms.method;
   settings.directLight = ms.directLight;
+  for (const auto& [name, value] : ms.params) settings.params[name] = value;
   if (separatesDirect(settings)) settings.spp = 0;  // the direct pass sized by the plan from the work (mutations per pixel)
   settings.chains = cfg.base.chains;
   settings.samplesPerUnit = cfg.base.samplesPerUnit;

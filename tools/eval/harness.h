@@ -24,8 +24,9 @@
 
 namespace mlt::eval {
 
-// "[label=]method[+separate-direct|+direct-in-chains][*scale]": e.g. "pt", "mmlt",
-// "mmlt-sd=mmlt+separate-direct", "pt-biased=pt*1.05". +separate-direct: the method renders the direct
+// "[label=]method[+separate-direct|+direct-in-chains][+name:value]...[*scale]": e.g. "pt", "mmlt",
+// "mmlt-sd=mmlt+separate-direct", "mmlt-lum=mmlt+target:luminance" (a method parameter, RenderMethod::params,
+// as --name value would set it), "pt-biased=pt*1.05". +separate-direct: the method renders the direct
 // light by a pt pass (RenderSettings::directLight Separate, the direct pass sized by the plan: directSppFor);
 // +direct-in-chains: by its chains (Chains); without either the plan decides (Auto, direct_light_rule.h).
 // Both are refused for a method that cannot render the direct light apart. A scale other than 1
@@ -35,6 +36,7 @@ struct MethodSpec {
   std::string method = "pt";
   DirectLight directLight = DirectLight::Auto;
   double testScale = 1.0;
+  MethodParams params;  // the method's own parameters (checked by the method)
 };
 MethodSpec parseMethodSpec(const std::string& spec);  // throws std::invalid_argument naming the spec
 

@@ -37,7 +37,9 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   technique.help = "probability of a technique change (a reversible jump) per mutation";
   technique.min = 0;
   technique.max = 1;
-  return {technique};
+  std::vector<ParamSpec> all = PrimarySampleChainMethod::params();
+  all.push_back(technique);
+  return all;
 }
 
 void RjmltMethod::validate(const RenderSettings& settings) const {
