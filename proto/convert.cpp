@@ -268,8 +268,7 @@ v1::JobPlan toProto(const JobPlan& plan) {
     i->set_tiles_y(m.tilesY);
     i->mutable_h()->Add(m.h.begin(), m.h.end());
   }
-  for (const BootstrapEstimate& e : plan.norm.bootstrapB) {
-    auto* p = n->add_bootstrap_b();
+  const auto estimate = [](const BootstrapEstimate& e, v1::BootstrapEstimate* p) {
     p->set_n(e.n);
     p->set_b(e.b);
     p->set_std_err(e.stdErr);
@@ -279,7 +278,9 @@ v1::JobPlan toProto(const JobPlan& plan) {
     p->set_bulk_std_err(e.bulkStdErr);
     p->set_bulk_var(e.bulkVar);
     p->set_excess_mean_sq(e.excessMeanSq);
-  }
+  };
+  for (const BootstrapEstimate& e : plan.norm.bootstrapB) estimate(e, n->add_bootstrap_b());
+  for (const BootstrapEstimate& e : plan.norm.bootstrapLuminance) estimate(e, n->add_bootstrap_luminance());
   for (const WorkUnit& u : plan.units) {
     auto* w = p.add_units();
     w->set_index(u.index);
@@ -334,13 +335,18 @@ JobPlan fromProto(const v1::JobPlan& p) {
       throw WireError("plan.norm.importance", fmt::format("a map of a {}x{} film in a plan of {}x{}", m.filmWidth,
                                                           m.filmHeight, plan.settings.width, plan.settings.height));
   }
-  for (const auto& e : n.bootstrap_b()) {
+  const auto estimate = [](const v1::BootstrapEstimate& e, const std::string& field) {
     for (double v : {e.b(), e.std_err(), e.sample_var(), e.bulk_b(), e.bulk_std_err(), e.bulk_var(), e.excess_mean_sq()})
-      if (!(std::isfinite(v) && v >= 0)) throw WireError("plan.norm.bootstrap_b", fmt::format("invalid value {}", v));
-    if (!(e.tau() >= 0)) throw WireError("plan.norm.bootstrap_b.tau", fmt::format("invalid value {}", e.tau()));
-    plan.norm.bootstrapB.push_back({e.n(), e.b(), e.std_err(), e.sample_var(), e.tau(), e.bulk_b(), e.bulk_std_err(),
-                                    e.bulk_var(), e.excess_mean_sq()});
-  }
+      if (!(std::isfinite(v) && v >= 0)) throw WireError(field, fmt::format("invalid value {}", v));
+    if (!(e.tau() >= 0)) throw WireError(field + ".tau", fmt::format("invalid value {}", e.tau()));
+    return BootstrapEstimate{e.n(), e.b(), e.std_err(), e.sample_var(), e.tau(), e.bulk_b(), e.bulk_std_err(),
+                             e.bulk_var(), e.excess_mean_sq()};
+  };
+  for (const auto& e : n.bootstrap_b()) plan.norm.bootstrapB.push_back(estimate(e, "plan.norm.bootstrap_b"));
+  for (const auto& e : n.bootstrap_luminance())
+    plan.norm.bootstrapLuminance.push_back(estimate(e, "plan.norm.bootstrap_luminance"));
+  if (!plan.norm.bootstrapLuminance.empty() && plan.norm.importance.empty())
+    throw WireError("plan.norm.bootstrap_luminance", "a luminance estimate without an importance map");
   if (p.total_units() != 0 && p.total_units() != uint32_t(p.units_size()))  // a page, not a whole plan
     throw WireError("plan.total_units", fmt::format("{} units in a plan of {}: a page (proto/plan_pages.h)",
                                                     p.units_size(), p.total_units()));
@@ -386,6 +392,7 @@ v1::ChainStats toProto(const ChainStats& s) {
   for (uint64_t v : s.proposedPerLengthKind) p.add_proposed_per_length_kind(v);
   for (uint64_t v : s.acceptedPerLengthKind) p.add_accepted_per_length_kind(v);
   for (const TargetSums& t : s.largeStepSums) *p.add_large_step_sums() = toProto(t);
+  for (const TargetSums& t : s.largeStepLuminanceSums) *p.add_large_step_luminance_sums() = toProto(t);
   return p;
 }
 
@@ -411,6 +418,8 @@ ChainStats fromProto(const v1::ChainStats& p) {
   s.proposedPerLengthKind.assign(p.proposed_per_length_kind().begin(), p.proposed_per_length_kind().end());
   s.acceptedPerLengthKind.assign(p.accepted_per_length_kind().begin(), p.accepted_per_length_kind().end());
   for (const auto& t : p.large_step_sums()) s.largeStepSums.push_back(fromProto(t, "stats.large_step_sums"));
+  for (const auto& t : p.large_step_luminance_sums())
+    s.largeStepLuminanceSums.push_back(fromProto(t, "stats.large_step_luminance_sums"));
   return s;
 }
 

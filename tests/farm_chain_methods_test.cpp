@@ -202,5 +202,21 @@ TEST(FarmChainMethods, MmltWithTheEmissionPassOnTwoWorkersMatchesTheInProcessRen
   EXPECT_GT(r.local.plan.units.size(), size_t(r.local.plan.settings.chains)) << "no units of the pass";
 }
 
+// The relative target (common/mlt/importance.h): the coordinator's plan carries the importance map and
+// b_lum's bootstrap estimate to the workers, their chains' target reads the map, their partials carry the
+// large steps' luminance sums, and the merged image is scaled to b_lum (develop.h (D8)): the in-process
+// image, bit for bit, with the same b.
+TEST(FarmChainMethods, MmltWithTheRelativeTargetOnTwoWorkersMatchesTheInProcessRender) {
+  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
+                                    "--method mmlt --target relative --seed 7 --width 32 --height 32 "
+                                    "--mutations-per-pixel 8 --chains 24 --bootstrap 4000",
+                                    "mmlt-relative");
+  expectSameImageAndStatistics(r, "mmlt");
+  EXPECT_EQ(text(r.farm, "target"), "relative");
+  EXPECT_EQ(number(r.farm, "targetFloor"), 0.5);
+  EXPECT_FALSE(r.local.plan.norm.importance.empty());
+  EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
+}
+
 }  // namespace
 }  // namespace mlt::farm::test

@@ -176,8 +176,11 @@ void expectContiguous(const std::vector<TaskRange>& tasks, uint32_t units) {
 // The wall time per move kind travels with the partial header; a negative or non-finite one is refused.
 TEST(FarmLayer, MoveSecondsTravelWithThePartialAndBadOnesAreRefused) {
   PartialResult r = somePartial();
+  r.stats.largeStepLuminanceSums.assign(2, TargetSums{});  // a relative target's (develop.h (D8))
+  r.stats.largeStepLuminanceSums[1].add(0.75, 0.5);
   const PartialResult back = wire::partialFromHeaderBytes(wire::partialHeaderBytes(r), r.film);
   EXPECT_EQ(back.stats.secondsPerKind, r.stats.secondsPerKind);
+  EXPECT_EQ(back.stats.largeStepLuminanceSums, r.stats.largeStepLuminanceSums);
   for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     r.stats.secondsPerKind = {0.5, bad};
     try {
@@ -285,6 +288,18 @@ TEST(FarmLayer, TheImportanceMapTravelsWithThePlanAndABadOneIsRefused) {
   refused([](v1::ImportanceMap& m) { m.mutable_h()->RemoveLast(); }, "a value short");
   refused([](v1::ImportanceMap& m) { m.set_tile_size(2); }, "another tile size");
   refused([](v1::ImportanceMap& m) { m.set_film_width(16); }, "another film");
+  // b_lum's estimates (develop.h (D8)) travel too, and never without a map.
+  plan.norm.bootstrapLuminance.assign(2, BootstrapEstimate{});
+  plan.norm.bootstrapLuminance[1] = {4096, 0.25, 0.001, 0.3, 2.5, 0.24, 0.001, 0.2, 0.01};
+  EXPECT_EQ(wire::parseJobPlan(wire::jobPlanBytes(plan)).norm.bootstrapLuminance, plan.norm.bootstrapLuminance);
+  v1::JobPlan noMap = wire::toProto(plan);
+  noMap.mutable_norm()->clear_importance();
+  try {
+    wire::fromProto(noMap);
+    ADD_FAILURE() << "a luminance estimate without a map was accepted";
+  } catch (const wire::WireError& e) {
+    EXPECT_EQ(e.field(), "plan.norm.bootstrap_luminance");
+  }
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // The Markov chain methods agree with bdpt on the bundled scenes themselves (scenes/*.xml through the
-// Mitsuba front end), at a small resolution, with their default target (luminance) and once with the
-// relative one (common/mlt/importance.h; more chains and mutations: its image mean also carries where the
-// chains are, see docs/CHAINS.md): image mean and 3x3 tile means of R independent job seeds
+// Mitsuba front end), at a small resolution, with their default target (luminance) and twice with the
+// relative one (common/mlt/importance.h; without develop.h (D8) its image mean varied 30% from run to run
+// here, and the "too weak" check below failed): image mean and 3x3 tile means of R independent job seeds
 // (bootstrap included) against a long bdpt estimate, within kZ combined standard errors.
 // With t(R - 1 = 11 dof) tails, P(|t| > 5) ~ 4e-4 per entry, ~2% over the ~60 entries here (fixed seeds).
 #include <gtest/gtest.h>
@@ -73,7 +73,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, MltBundled,
                                            Case{"cornell-spheres.xml", "mmlt", 32, 0.10},
                                            Case{"caustic-mirror.xml", "pssmlt", 32, 0.10},
                                            Case{"door-ajar.xml", "mmlt", 32, 0.10},
-                                           Case{"cornell-box.xml", "mmlt", 128, 0.08, "relative", 256}),
+                                           Case{"cornell-box.xml", "mmlt", 32, 0.08, "relative"},
+                                           Case{"door-ajar.xml", "mmlt", 32, 0.10, "relative"}),
                          [](const ::testing::TestParamInfo<Case>& info) {
                            std::string n = std::string(info.param.scene) + "_" + info.param.method.c_str();
                            n = n.substr(0, n.find('.')) + "_" + info.param.method.c_str();

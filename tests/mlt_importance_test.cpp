@@ -22,6 +22,7 @@
 #include "common/core/color.h"
 #include "common/integrators/evaluators.h"
 #include "common/job/importance_pilot.h"
+#include "common/job/mlt_job.h"
 #include "common/methods/pss_method.h"
 #include "common/methods/registry.h"
 #include "common/mlt/chain.h"
@@ -257,6 +258,43 @@ TEST_P(RelativeB, TheBootstrapsBIsTheHWeightedImageMean) {
 
 INSTANTIATE_TEST_SUITE_P(Methods, RelativeB, ::testing::Values("pssmlt", "mmlt"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return std::string(info.param); });
+
+// (D8): with a relative target each slot's developed image holds P b_lum^ of luminance, b_lum^ pooled from
+// the bootstrap's luminance and the large steps' (refinedLuminanceB), whatever the chains' spread; and the
+// farm's partials carry the large steps' luminance sums.
+TEST(RelativeDevelop, EachSlotsImageHoldsBLuminance) {
+  for (const char* method : {"pssmlt", "mmlt"}) {
+    RenderSettings s = chainSettings(method, 3);
+    s.mutationsPerPixel = 16;
+    s.bootstrapSamples = 4096;
+    const JobPlan plan = planJob(cornell(), s);
+    ASSERT_FALSE(plan.norm.importance.empty());
+    ASSERT_EQ(plan.norm.bootstrapLuminance.size(), plan.norm.mutationsPerLength.size());
+    PartialResult merged;
+    for (const WorkUnit& u : plan.units) merged.add(runWorkUnit(cornell(), plan, u));
+    const RefinedB lum = refinedLuminanceB(plan.norm, merged.stats);
+    uint64_t largeSteps = 0;
+    for (const TargetSums& t : merged.stats.largeStepLuminanceSums) largeSteps += t.n;
+    EXPECT_GT(largeSteps, 0u) << method;
+    // Slot by slot: develop with every other slot's scale set to 0.
+    const std::vector<double> scales = markovChainLayerScales(plan, merged);
+    double total = 0;
+    for (size_t slot = 0; slot < plan.norm.mutationsPerLength.size(); ++slot) {
+      if (plan.norm.mutationsPerLength[slot] == 0) continue;
+      std::vector<double> only(scales.size(), 0.0);
+      for (size_t layer : {chainLayer(slot), largeStepLayer(slot, plan.norm.mutationsPerLength.size())})
+        if (layer < only.size()) only[layer] = scales[layer];
+      double sum = 0;
+      for (const Color& c : merged.film.develop(only)) sum += double(luminance(c));
+      EXPECT_NEAR(sum, lum.perSlot[slot].b * kW * kH2, 1e-5 * sum) << method << " slot " << slot;
+      total += sum;
+    }
+    double image = 0;
+    for (const Color& c : developImage(plan, merged)) image += double(luminance(c));
+    EXPECT_NEAR(image, total, 1e-5 * image) << method;
+    EXPECT_NEAR(image / (kW * kH2), lum.total.b, 1e-5 * lum.total.b) << method;
+  }
+}
 
 TEST(ImportancePilot, IsAPureFunctionOfItsInputs) {
   const RenderSettings s = chainSettings("mmlt", 5);

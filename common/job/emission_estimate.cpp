@@ -178,10 +178,12 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
 
   // 2. Fresh stratified rays per cell; per-row sums of I_j^ and of its variance estimate, reduced in row order.
   std::vector<double> rowMean(size_t(Y), 0.0), rowVar(size_t(Y), 0.0);
+  std::vector<double> rowLum(size_t(Y), 0.0), rowLumVar(size_t(Y), 0.0);  // unweighted (a map only)
+  const bool weighted = importance && !importance->empty();
   forRows(Y, parallel, [&](int y) {
     IndependentSource source(0, 0);
     PathContribution path;
-    double sumMean = 0, sumVar = 0;
+    double sumMean = 0, sumVar = 0, sumLum = 0, sumLumVar = 0;
     for (int x = 0; x < X; ++x) {
       const uint64_t j = uint64_t(y) * uint64_t(X) + uint64_t(x);
       const uint32_t half = (edge[j] ? edgeRays : kEmissionFlatRays) / 2;
@@ -195,19 +197,24 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
         }
         m[r] = sum / double(half);
       }
-      const double h = importance && !importance->empty()
-                           ? double(importance->at(Vec2{float(x / G) + 0.5f, float(y / G) + 0.5f}))
-                           : 1.0;
-      sumMean += h * 0.5 * (m[0] + m[1]);
-      sumVar += h * h * 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4 = Var((m_0 + m_1) / 2)
+      const double h = weighted ? double(importance->at(Vec2{float(x / G) + 0.5f, float(y / G) + 0.5f})) : 1.0;
+      const double mean = 0.5 * (m[0] + m[1]), var = 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4
+      sumMean += h * mean;
+      sumVar += h * h * var;
+      sumLum += mean;
+      sumLumVar += var;
     }
     rowMean[size_t(y)] = sumMean;
     rowVar[size_t(y)] = sumVar;
+    rowLum[size_t(y)] = sumLum;
+    rowLumVar[size_t(y)] = sumLumVar;
   });
-  double total = 0, var = 0;
+  double total = 0, var = 0, totalLum = 0, varLum = 0;
   for (int y = 0; y < Y; ++y) {
     total += rowMean[size_t(y)];
     var += rowVar[size_t(y)];
+    totalLum += rowLum[size_t(y)];
+    varLum += rowLumVar[size_t(y)];
   }
 
   out.edgeCells = edges;
@@ -223,6 +230,12 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
   e.bulkStdErr = e.stdErr;
   e.bulkVar = 0;
   e.excessMeanSq = 0;
+  if (weighted) {  // the same summary of the unweighted sums
+    BootstrapEstimate& l = out.luminance;
+    l = e;
+    l.b = l.bulkB = totalLum / double(C);
+    l.stdErr = l.bulkStdErr = std::sqrt(varLum) / double(C);
+  }
   return out;
 }
 

@@ -79,6 +79,9 @@ constexpr double kEmissionRayCost = 3;
 struct EmissionEstimate {
   bool estimated = false;   // false: the pilot alone ran (no emission seen, or kEmissionMaxCellShare reached)
   BootstrapEstimate estimate;
+  // With an importance map: `estimate` is of the weighted target, this of b_1's luminance (unweighted), from
+  // the same rays (n = 0 without a map).
+  BootstrapEstimate luminance;
   uint64_t rays = 0;            // pilot + stage 2
   int cellsPerPixelAxis = 1;    // G
   uint64_t litCells = 0;        // cells whose pilot ray saw emission

@@ -25,6 +25,7 @@ void ChainStats::add(const ChainStats& o) {
   addVectors(acceptedPerLengthKind, o.acceptedPerLengthKind);
   addVectors(secondsPerKind, o.secondsPerKind);
   addPerSlot(largeStepSums, o.largeStepSums);
+  addPerSlot(largeStepLuminanceSums, o.largeStepLuminanceSums);
 }
 
 void PartialResult::add(const PartialResult& o) {

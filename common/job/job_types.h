@@ -52,6 +52,13 @@ struct Normalization {
   // The relative target's importance map (common/mlt/importance.h (R2)), which every chain's target reads;
   // empty: the target is the path's luminance.
   ImportanceMap importance;
+  // With a map: the bootstrap's estimate of b_lum per slot, the mean luminance of a uniform sample (its
+  // candidates' luminance; b_1's camera rays unweighted), to which the development scales each slot's image
+  // (mlt/develop.h (D8)). Empty without a map.
+  std::vector<BootstrapEstimate> bootstrapLuminance;
+  double luminanceTailThreshold(size_t slot) const {
+    return slot < bootstrapLuminance.size() ? bootstrapLuminance[slot].tau : std::numeric_limits<double>::infinity();
+  }
   // The b a chain of `slot` weights Kelemen MIS splats with, and its large-step layer is developed with
   // (mlt/develop.h (D7)): the bootstrap's b_k (mmlt, rjmlt) or b.
   double weightB(size_t slot) const { return bk.empty() ? b : (slot < bk.size() ? bk[slot] : 0.0); }
@@ -78,6 +85,8 @@ struct ChainStats {              // sums, so they merge by addition
   // sampled steps). Informational, like PartialResult::seconds: never part of the image.
   std::vector<double> secondsPerKind;
   std::vector<TargetSums> largeStepSums;     // c of every large step, per path length slot (quantized per unit)
+  // With a relative target: every large step's luminance, per slot (b_lum, develop.h (D8)); else empty.
+  std::vector<TargetSums> largeStepLuminanceSums;
   void add(const ChainStats& o);
 };
 

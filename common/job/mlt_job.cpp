@@ -110,6 +110,23 @@ uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost(s) : 0.0);
 }
 
+RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged) {
+  RefinedB r;
+  const size_t slots = std::max(norm.bootstrapLuminance.size(), merged.largeStepLuminanceSums.size());
+  r.perSlot.resize(slots);
+  double var = 0;
+  for (size_t l = 0; l < slots; ++l) {
+    const BootstrapEstimate boot = l < norm.bootstrapLuminance.size() ? norm.bootstrapLuminance[l] : BootstrapEstimate{};
+    const TargetSums large = l < merged.largeStepLuminanceSums.size() ? merged.largeStepLuminanceSums[l] : TargetSums{};
+    r.perSlot[l] = combineB(boot, large);
+    r.total.b += r.perSlot[l].b;
+    r.total.samples += r.perSlot[l].samples;
+    var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
+  }
+  r.total.stdErr = std::sqrt(var);
+  return r;
+}
+
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film) {
   RefinedB r;
   const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
@@ -329,6 +346,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
       const double c = targetFunction(*path, importance);
+      if (importance) info->luminance = targetFunction(*path);  // b_lum (develop.h (D8))
       // mmlt: one splat per path; its allocation bin (pssmlt's single length needs none).
       if (c > 0 && !path->splats.empty()) info->bin = allocationBin(path->splats[0].pRaster, width, height);
       info->work = source.reads();
@@ -393,6 +411,11 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     if (raysForLengthOne) {
       final = e1->estimate;
       final.sampleVar = final.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
+      if (importance) {  // b_lum of length 1 from the same rays, unweighted
+        const double var = l1.luminanceEstimate.sampleVar;
+        l1.luminanceEstimate = e1->luminance;
+        l1.luminanceEstimate.sampleVar = l1.luminanceEstimate.bulkVar = var;
+      }
       spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
                    "outline with {} rays each; {}); the {} candidates of length 1 said {:.6g} +- {:.2g}",
                    spec.name(), final.b, final.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis,
@@ -505,6 +528,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     norm.mutationsPerLength.assign(1, 0);
   }
   norm.bootstrapB.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
+  if (!norm.importance.empty()) norm.bootstrapLuminance.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
   uint32_t index = 0;
   for (size_t l = 0; l < boot.lengths.size(); ++l) {
     const LengthBootstrap& lb = boot.lengths[l];
@@ -515,6 +539,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     }
     norm.mutationsPerLength[slot] = Mk[l];
     norm.bootstrapB[slot] = lb.estimate;
+    if (!norm.importance.empty()) norm.bootstrapLuminance[slot] = lb.luminanceEstimate;
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {
@@ -627,6 +652,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   config.tau = plan.norm.tailThreshold(size_t(slot));
   config.stratifyLargeSteps = stratify;
   config.importance = importance;
+  config.luminanceTau = norm.luminanceTailThreshold(size_t(slot));
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
 
@@ -654,6 +680,11 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   st.largeStepSums.assign(slot + 1, TargetSums{});
   st.largeStepSums[slot] = counts.largeSteps;
   quantizeSums(st.largeStepSums[slot], s.seed, unit.index, uint64_t(slot));
+  if (importance) {
+    st.largeStepLuminanceSums.assign(slot + 1, TargetSums{});
+    st.largeStepLuminanceSums[slot] = counts.largeStepsLuminance;
+    quantizeSums(st.largeStepLuminanceSums[slot], s.seed, unit.index, kLuminanceSumsKey + uint64_t(slot));
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
@@ -673,6 +704,34 @@ std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialRes
   }
   return merged.film.develop(scales);
 }
+
+namespace {
+// (D8): each slot's chain and large-step layers scaled together so that the slot's image holds P b_lum^ of
+// luminance, b_lum^ pooled from the bootstrap's luminance and the large steps' (refinedLuminanceB).
+void scaleToLuminance(const Normalization& norm, const PartialResult& merged, std::vector<double>& scales) {
+  const Film& film = merged.film;
+  const double P = double(film.width()) * double(film.height());
+  const RefinedB lum = refinedLuminanceB(norm, merged.stats);
+  const size_t slots = norm.mutationsPerLength.size();
+  const auto layerLuminance = [&](size_t layer) {  // sum over pixels, as luminance() weighs colours
+    if (layer >= scales.size() || scales[layer] == 0 || !film.hasSplatLayer(layer)) return 0.0;
+    const PixelBuffer& sums = film.splatLayer(layer);
+    double total = 0;
+    for (size_t i = 0; i < sums.size(); ++i)
+      total += double(luminance(Color(1, 0, 0))) * sums[i].r + double(luminance(Color(0, 1, 0))) * sums[i].g +
+               double(luminance(Color(0, 0, 1))) * sums[i].b;
+    return total * scales[layer];
+  };
+  for (size_t slot = 0; slot < slots && slot < lum.perSlot.size(); ++slot) {
+    const size_t chain = chainLayer(slot), large = largeStepLayer(slot, slots);
+    const double developed = layerLuminance(chain) + layerLuminance(large);
+    if (!(developed > 0) || !(lum.perSlot[slot].b > 0)) continue;  // nothing to scale (the image keeps its zeros)
+    const double r = lum.perSlot[slot].b * P / developed;
+    for (size_t layer : {chain, large})
+      if (layer < scales.size()) scales[layer] *= r;
+  }
+}
+}  // namespace
 
 std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialResult& merged) {
   const RenderSettings& s = plan.settings;
@@ -696,6 +755,7 @@ std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialRes
   const size_t slots = norm.mutationsPerLength.size();
   for (size_t slot = 0; slot < M.size() && slot < slots && largeStepLayer(slot, slots) < scales.size(); ++slot)
     if (M[slot] > 0) scales[largeStepLayer(slot, slots)] = chainSplatScale(norm.weightB(slot), M[slot], P);
+  if (!norm.importance.empty()) scaleToLuminance(norm, merged, scales);  // (D8)
   return scales;
 }
 

@@ -228,6 +228,12 @@ struct RefinedB {
 };
 // film (optional): the merged film, whose bStrataLayer(slot) layers post-stratify the large steps' bulk (D6).
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film = nullptr);
+// With a relative target (Normalization::importance): b_lum per slot, the image's brightness, pooled from the
+// bootstrap's luminance and the large steps' (develop.h (D3) for luminance, without strata; (D8)).
+RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged);
+// The quantization key of the large steps' luminance sums of a slot: kLuminanceSumsKey + slot (apart from
+// their c sums' keys, slot).
+constexpr uint64_t kLuminanceSumsKey = uint64_t(1) << 32;
 
 // Throws std::invalid_argument naming the setting if a Markov chain job cannot be planned with these
 // (resolved) settings, e.g. mmlt with unlimited depth. Cheap: the coordinator calls it at submission.

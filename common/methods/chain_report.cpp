@@ -59,12 +59,23 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   ChainReport r;
   r.method = s.method;
   r.settings = s;
-  // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)).
-  const RefinedB refined = refinedB(norm, merged.stats, &merged.film);
+  // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)); with a
+  // relative target the image's brightness, b_lum, to which each length's image is scaled (D8).
+  const bool relative = !norm.importance.empty();
+  const RefinedB refined = relative ? refinedLuminanceB(norm, merged.stats) : refinedB(norm, merged.stats, &merged.film);
   r.b = refined.total.b;
   r.bStdErr = refined.total.stdErr;
   r.bBootstrap = norm.b;
   r.bBootstrapStdErr = norm.bStdErr;
+  if (relative) {
+    double b = 0, var = 0;
+    for (const BootstrapEstimate& e : norm.bootstrapLuminance) {
+      b += e.b;
+      var += e.stdErr * e.stdErr;
+    }
+    r.bBootstrap = b;
+    r.bBootstrapStdErr = std::sqrt(var);
+  }
   r.directShare = norm.directShare;
   r.directCv = norm.directCv;
   r.bootstrapSamples = norm.bootstrapSamples;

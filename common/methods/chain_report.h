@@ -5,7 +5,8 @@
 // the same summary whether the image was rendered in this process or fetched from the farm.
 //
 // Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
-//   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with), bBootstrap,
+//   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with; with a relative
+//   target, common/mlt/importance.h, the luminance b_lum each length is scaled to, develop.h (D8)), bBootstrap,
 //   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),

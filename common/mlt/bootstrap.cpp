@@ -91,6 +91,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     if (binned) {
       lb.bin.resize(to, kNoBin);
       lb.work.resize(to, 0);
+      lb.luminance.resize(to, -1);
     }
     const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
       BinnedCandidateFn fn = makeCandidateFn();
@@ -100,6 +101,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
         if (binned) {
           lb.bin[i] = info.bin;
           lb.work[i] = info.work;
+          lb.luminance[i] = info.luminance;
         }
       }
     };
@@ -115,6 +117,11 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     LengthBootstrap& lb = result.lengths[l];
     lb.estimate = summarizeCandidates(lb.c);
     varMean[l] = lb.estimate.stdErr * lb.estimate.stdErr;
+    // Luminances reported by every candidate (all or none: the candidate function decides per job).
+    const bool reported = !lb.luminance.empty() && std::all_of(lb.luminance.begin(), lb.luminance.end(),
+                                                               [](double v) { return v >= 0 && std::isfinite(v); });
+    if (reported) lb.luminanceEstimate = summarizeCandidates(lb.luminance);
+    else lb.luminance.clear();
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;

@@ -39,9 +39,13 @@ using CandidateFnFactory = std::function<CandidateFn()>;
 // its work: the primary-sample numbers it drew (IndependentSource::reads), a deterministic measure of its
 // cost (a vertex draws a few numbers and traces a ray), which the budgeted sizing counts.
 constexpr uint32_t kNoBin = UINT32_MAX;
+// luminance (>= 0 where reported): the luminance of the candidate's path, which a relative target's c is not
+// (importance.h): its mean estimates b_lum, the image's brightness, which the development keeps (develop.h
+// (D8)).
 struct CandidateInfo {
   uint32_t bin = kNoBin;
   uint32_t work = 0;
+  double luminance = -1;
 };
 using BinnedCandidateFn = std::function<double(uint64_t index, int pathLength, CandidateInfo* info)>;
 using BinnedCandidateFnFactory = std::function<BinnedCandidateFn()>;
@@ -82,9 +86,11 @@ struct LengthBootstrap {
   std::vector<double> c;  // target value of each candidate
   std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
+  std::vector<double> luminance;  // each candidate's luminance where reported (CandidateInfo), else empty
   // b (the mean), stdErr (from the kCandidateGroups group means), sampleVar (c's variance per candidate,
   // i.i.d. formula: a uniform sample's variance) and the tail split of develop.h (D3): what the plan keeps.
   BootstrapEstimate estimate;
+  BootstrapEstimate luminanceEstimate;  // the same summary of `luminance` (n = 0: not reported)
   AliasTable table;       // over c; empty if b == 0
 };
 

@@ -43,6 +43,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     ++counts.proposed[kind];
     if (p.independent) {
       counts.largeSteps.add(cy, config.tau);
+      if (config.importance) counts.largeStepsLuminance.add(targetFunction(*y), config.luminanceTau);
       if (config.stratifyLargeSteps) {
         const Vec2 u = state.stratumPoint();
         if (u.x >= 0 && u.y >= 0) sink.stratumSample(u, std::min(cy, config.tau));

@@ -101,6 +101,8 @@ struct ChainConfig {
   // The target's importance map (importance.h (R2)); null: c is the path's luminance. The start state's
   // c (runChain's cx) must have been computed with the same map.
   const ImportanceMap* importance = nullptr;
+  // With a map: the tail threshold of the large steps' luminance sums (ChainCounts::largeStepsLuminance).
+  double luminanceTau = std::numeric_limits<double>::infinity();
   // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
   // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
   double acceptancePower = 1;
@@ -120,6 +122,8 @@ struct ChainCounts {
   // c(y) of every independent proposal (a large step), accepted or not: uniform samples of the target,
   // which refine b as the job runs (develop.h (D3)).
   TargetSums largeSteps;
+  // With an importance map (ChainConfig::importance): the luminance of those proposals (b_lum, develop.h (D8)).
+  TargetSums largeStepsLuminance;
 };
 
 // Runs `mutations` steps from the current state x (already evaluated into `current`, target value cx > 0,
