@@ -329,6 +329,16 @@ TEST(EvalHarness, MethodSpecs) {
   EXPECT_THROW(parseMethodSpec("pt+separate-direct"), std::invalid_argument);  // pt has no direct pass apart
   EXPECT_THROW(parseMethodSpec("pssmlt+direct-in-chains"), std::invalid_argument);
   EXPECT_THROW(parseMethodSpec("pssmlt+separate-direct"), std::invalid_argument);  // its splats carry no length
+  // A method's own parameters, name:value, checked by the method.
+  const MethodSpec rel = parseMethodSpec("rel=mmlt+target:relative+target-floor:0.25");
+  EXPECT_EQ(rel.label, "rel");
+  EXPECT_EQ(rel.method, "mmlt");
+  EXPECT_EQ(rel.params, (MethodParams{{"target", "relative"}, {"target-floor", "0.25"}}));
+  EXPECT_EQ(parseMethodSpec("rjmlt+separate-direct+technique-step:0.1").directLight, DirectLight::Separate);
+  EXPECT_THROW(parseMethodSpec("mmlt+target:brightness"), std::invalid_argument);  // not a choice
+  EXPECT_THROW(parseMethodSpec("pt+target:relative"), std::invalid_argument);       // not pt's parameter
+  EXPECT_THROW(parseMethodSpec("mmlt+target"), std::invalid_argument);              // no value
+  EXPECT_THROW(parseMethodSpec("mmlt+:relative"), std::invalid_argument);           // no name
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 0, 1));
   EXPECT_NE(runSeed(1, "s", "pt", 0, 0), runSeed(1, "s", "pt", 1, 0));
 }
