@@ -110,15 +110,20 @@ uint64_t bootstrapPerLength(const ChainJobSpec& spec, const RenderSettings& s) {
   return bootstrapPerLengthFor(spec, s, std::isfinite(M) && M > 0 ? kBootstrapShare * M / spec.candidateCost(s) : 0.0);
 }
 
-RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged) {
+namespace {
+// (D3)-(D5) per slot from the bootstrap's estimates and the large steps' sums (strata: the slot's (D6)
+// strata, or none), and their total with the slots' standard errors in quadrature.
+template <typename Strata>
+RefinedB refineSlots(const std::vector<BootstrapEstimate>& boot, const std::vector<TargetSums>& large,
+                     const Strata& strataOf) {
   RefinedB r;
-  const size_t slots = std::max(norm.bootstrapLuminance.size(), merged.largeStepLuminanceSums.size());
+  const size_t slots = std::max(boot.size(), large.size());
   r.perSlot.resize(slots);
   double var = 0;
   for (size_t l = 0; l < slots; ++l) {
-    const BootstrapEstimate boot = l < norm.bootstrapLuminance.size() ? norm.bootstrapLuminance[l] : BootstrapEstimate{};
-    const TargetSums large = l < merged.largeStepLuminanceSums.size() ? merged.largeStepLuminanceSums[l] : TargetSums{};
-    r.perSlot[l] = combineB(boot, large);
+    const TargetSums sums = l < large.size() ? large[l] : TargetSums{};
+    const StratifiedMean strata = strataOf(l, sums);
+    r.perSlot[l] = combineB(l < boot.size() ? boot[l] : BootstrapEstimate{}, sums, strata.valid ? &strata : nullptr);
     r.total.b += r.perSlot[l].b;
     r.total.samples += r.perSlot[l].samples;
     var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
@@ -126,26 +131,21 @@ RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged) 
   r.total.stdErr = std::sqrt(var);
   return r;
 }
+}  // namespace
+
+RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged) {
+  return refineSlots(norm.bootstrapLuminance, merged.largeStepLuminanceSums,
+                     [](size_t, const TargetSums&) { return StratifiedMean{}; });
+}
 
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film) {
-  RefinedB r;
-  const size_t slots = std::max(norm.bootstrapB.size(), merged.largeStepSums.size());
-  r.perSlot.resize(slots);
-  double var = 0;
-  for (size_t l = 0; l < slots; ++l) {
-    const BootstrapEstimate boot = l < norm.bootstrapB.size() ? norm.bootstrapB[l] : BootstrapEstimate{};
-    const TargetSums large = l < merged.largeStepSums.size() ? merged.largeStepSums[l] : TargetSums{};
+  return refineSlots(norm.bootstrapB, merged.largeStepSums, [film](size_t l, const TargetSums& large) {
     StratifiedMean strata;  // (D6), where the chains kept strata
     if (film && film->hasSplatLayer(bStrataLayer(l)) && large.n > 0)
       strata = postStratifiedMean(film->splatLayer(bStrataLayer(l)), film->width(), film->height());
-    const bool useStrata = strata.valid && strata.n == large.n;  // every large step, once
-    r.perSlot[l] = combineB(boot, large, useStrata ? &strata : nullptr);
-    r.total.b += r.perSlot[l].b;
-    r.total.samples += r.perSlot[l].samples;
-    var += r.perSlot[l].stdErr * r.perSlot[l].stdErr;
-  }
-  r.total.stdErr = std::sqrt(var);
-  return r;
+    if (strata.valid && strata.n != large.n) strata.valid = false;  // every large step, once, or none
+    return strata;
+  });
 }
 
 namespace {

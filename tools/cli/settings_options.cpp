@@ -98,13 +98,19 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
       auto it = params_.find(spec.name);
       if (it == params_.end()) {
         Param& p = params_[spec.name];
-        p.option = add_option("--" + spec.name, p.value,
-                              fmt::format("{}: {} (default {})", m->name(), spec.help, spec.defaultValue));
+        p.option = add_option("--" + spec.name, p.value, "");
         it = params_.find(spec.name);
-      } else {
-        it->second.option->description(it->second.option->get_description() + "; " + m->name() + ": " + spec.help);
       }
-      it->second.methods.push_back(m->name());
+      Param& p = it->second;
+      p.methods.push_back(m->name());
+      // Methods that share a parameter with the same help (the chain family's target) are named together.
+      const std::string help = fmt::format("{} (default {})", spec.help, spec.defaultValue);
+      auto same = std::find_if(p.helps.begin(), p.helps.end(), [&](const auto& h) { return h.second == help; });
+      if (same == p.helps.end()) p.helps.emplace_back(m->name(), help);
+      else same->first += ", " + m->name();
+      std::string description;
+      for (const auto& [names, text] : p.helps) description += (description.empty() ? "" : "; ") + names + ": " + text;
+      p.option->description(description);
     }
   }
 }

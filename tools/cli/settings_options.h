@@ -59,6 +59,7 @@ class RenderSettingsOptions : public CLI::Option_group {
     std::string value;
     CLI::Option* option = nullptr;
     std::vector<std::string> methods;  // the methods that have it
+    std::vector<std::pair<std::string, std::string>> helps;  // (methods, help): one entry per distinct help
   };
   std::map<std::string, Param> params_;
   CLI::Option *sppOpt_ = nullptr, *widthOpt_ = nullptr, *maxDepthOpt_ = nullptr, *rrDepthOpt_ = nullptr;
