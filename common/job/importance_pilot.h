@@ -5,10 +5,11 @@
 // position in the pixel, keyed by (job seed, pixel) on a stream of its own: independent of the bootstrap's
 // candidates and of every chain's numbers, so that the map is fixed before any sample of b is drawn and
 // b^ stays unbiased (a map that depended on b's own samples would not). pt is the cheapest estimator of
-// the whole image per sample (on the bundled scenes 2-3x bdpt's samples per second), and its misses
-// (caustics that only paths hitting the light reach) err on the safe side: a tile whose light the
-// pilot misses gets a larger h, so more of the chains' mutations, not fewer. At 256 x 256 the map has
-// 4 x 4-pixel tiles (importanceTileSize), each tile's g pools the 3 x 3 tiles around it: 288 samples.
+// the whole image per sample (on the bundled scenes 2-3x bdpt's samples per second); its misses
+// (caustics that only paths hitting the light reach) give their tiles a larger h, so more of the chains'
+// mutations, and make the rare paths there peaks of the target (caustic-mirror: importance.h). At 256 x 256
+// the map has 4 x 4-pixel tiles (importanceTileSize), each tile's g pools the 3 x 3 tiles around it: 288
+// samples.
 // A pure function of (scene, seed, film, integrator settings, floor).
 #pragma once
 #include <cstdint>

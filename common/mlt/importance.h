@@ -13,13 +13,17 @@
 //     c(u) = sum over the path's splats i of  luminance(f_i) h(pixel of splat i),
 //     h_j  = 1 / sqrt(g_j^2 + (kappa gbar)^2),                                                     (R2)
 // with g_j an estimate of pixel j's luminance I_j (the importance pilot, common/job/importance_pilot.h),
-// gbar its mean over the film and kappa the floor (ImportanceSettings::floor): pixels much brighter than
+// gbar its mean over the film and kappa the floor (the methods' parameter target-floor,
+// ChainJobSpec::importanceFloor): pixels much brighter than
 // kappa gbar get mutations in proportion to I_j / g_j ~ 1 (flat), darker ones in proportion to their
 // brightness, as luminance would (an image's black regions are not worth a chain's time). This is
 // Hoberock and Hart's "arbitrary importance functions for MLT" (2010) with the importance chosen for relMSE.
 // b = E[c] then integrates h-weighted luminance; the bootstrap, the large steps, the tail split and the
-// development are unchanged: (D1)-(D7) hold for any c. g only has to be roughly right: a wrong g costs
-// variance, never bias, because h is fixed before any sample of b or of the chains is drawn.
+// development are unchanged, (D1)-(D7) hold for any c, and (D8) takes each length's brightness from
+// luminance. A wrong g costs variance, never bias, because h is fixed before any sample of b or of the
+// chains is drawn; but the variance can be large: light the pilot missed (a caustic seen in a mirror)
+// sits in tiles with the largest h, where its rare paths become peaks of the target that hold a chain
+// (docs/CHAINS.md, "A relative target again": why it is not the default).
 //
 // The map is per tile of T x T pixels (at most kImportanceMaxTiles per axis, so that a plan carries at most
 // 64 x 64 floats whatever the film) and read by the splat's raster position.
@@ -55,7 +59,7 @@ int importanceTileSize(int width, int height);
 // (R2) from per-tile sums of the pilot's luminance samples and their counts (tilesX x tilesY, as
 // importanceTileSize makes them): g of a tile is the mean over it and its 8 neighbours (a 3 x 3 box of
 // tiles, clipped to the film), gbar the mean over all samples, h = 1 / sqrt(g^2 + (floor gbar)^2),
-// scaled so that the mean of h g over the samples is 1 (c keeps luminance's scale). A pilot that saw no
+// scaled so that the mean of h g over the samples is gbar (c keeps luminance's scale). A pilot that saw no
 // light (gbar = 0) gives an empty map: luminance.
 ImportanceMap importanceFromTileSums(int filmWidth, int filmHeight, const std::vector<double>& tileSums,
                                      const std::vector<uint64_t>& tileCounts, double floor);
