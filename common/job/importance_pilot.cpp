@@ -26,9 +26,8 @@ constexpr uint64_t kImportanceKey = 0x696d7070ULL;  // "impp"
 ImportancePilot importancePilot(const RenderScene& scene, const RenderSettings& s, double floor, bool parallel) {
   const auto t0 = std::chrono::steady_clock::now();
   const int W = s.width, H = s.height;
-  if (W <= 0 || H <= 0) throw std::invalid_argument("importance pilot: empty film");
-  const int T = importanceTileSize(W, H);
-  const int X = (W + T - 1) / T, Y = (H + T - 1) / T;
+  const ImportanceMap grid = importanceGrid(W, H);
+  const int T = grid.tileSize, X = grid.tilesX, Y = grid.tilesY;
   const std::unique_ptr<PathEvaluator> pt = makeEvaluator(scene, "pt", s.integrator);
   // Samples per pixel: at least kImportancePooledSamples behind each tile's g (3 x 3 tiles of T x T pixels).
   const uint32_t spp = uint32_t((kImportancePooledSamples + 9 * T * T - 1) / (9 * T * T));

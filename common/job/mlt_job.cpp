@@ -327,6 +327,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
+  bc.luminance = importance != nullptr;  // b_lum (develop.h (D8))
   if (bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
     // A budget of the cost of N mutations per length (bootstrap.h, chainMixCost: a candidate of a long
     // path costs more than one of a short path, and the chains dwell on bright paths, often short). A

@@ -67,14 +67,10 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.bStdErr = refined.total.stdErr;
   r.bBootstrap = norm.b;
   r.bBootstrapStdErr = norm.bStdErr;
-  if (relative) {
-    double b = 0, var = 0;
-    for (const BootstrapEstimate& e : norm.bootstrapLuminance) {
-      b += e.b;
-      var += e.stdErr * e.stdErr;
-    }
-    r.bBootstrap = b;
-    r.bBootstrapStdErr = std::sqrt(var);
+  if (relative) {  // the bootstrap's b_lum alone: no large steps pooled
+    const BEstimate boot = refinedLuminanceB(norm, ChainStats{}).total;
+    r.bBootstrap = boot.b;
+    r.bBootstrapStdErr = boot.stdErr;
   }
   r.directShare = norm.directShare;
   r.directCv = norm.directCv;

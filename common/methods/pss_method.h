@@ -26,7 +26,7 @@ class PrimarySampleChainMethod : public RenderMethod, public ChainJobSpec {
   MethodFamily family() const final { return MethodFamily::MarkovChain; }
   std::vector<std::string> mutationKinds() const override { return {"large", "small"}; }  // index = MutationType
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
-  // The target (common/mlt/importance.h): "target" relative (the default) or luminance, and "target-floor"
+  // The target (common/mlt/importance.h): "target" luminance (the default) or relative, and "target-floor"
   // kappa of the relative one. A method with parameters of its own appends them to these.
   std::vector<ParamSpec> params() const override;
   double importanceFloor(const RenderSettings& settings) const override;

@@ -91,7 +91,7 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     if (binned) {
       lb.bin.resize(to, kNoBin);
       lb.work.resize(to, 0);
-      lb.luminance.resize(to, -1);
+      if (config.luminance) lb.luminance.resize(to, -1);
     }
     const auto body = [&](const tbb::blocked_range<uint64_t>& r) {
       BinnedCandidateFn fn = makeCandidateFn();
@@ -101,27 +101,27 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
         if (binned) {
           lb.bin[i] = info.bin;
           lb.work[i] = info.work;
-          lb.luminance[i] = info.luminance;
+          if (config.luminance) lb.luminance[i] = info.luminance;
         }
       }
     };
     if (config.parallel) tbb::parallel_for(tbb::blocked_range<uint64_t>(from, to, 1024), body);
     else body(tbb::blocked_range<uint64_t>(from, to));
-    for (uint64_t i = from; i < to; ++i)
+    for (uint64_t i = from; i < to; ++i) {
       if (!(std::isfinite(lb.c[i]) && lb.c[i] >= 0))
         throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
                                  " has invalid target value " + std::to_string(lb.c[i]));
+      if (!lb.luminance.empty() && !(std::isfinite(lb.luminance[i]) && lb.luminance[i] >= 0))
+        throw std::runtime_error("bootstrap: candidate " + std::to_string(lb.firstCandidate + i) +
+                                 " reported no valid luminance (" + std::to_string(lb.luminance[i]) + ")");
+    }
   };
   // Sequential reductions in index order (bit-identical for any thread count).
   const auto reduce = [&](size_t l) {
     LengthBootstrap& lb = result.lengths[l];
     lb.estimate = summarizeCandidates(lb.c);
     varMean[l] = lb.estimate.stdErr * lb.estimate.stdErr;
-    // Luminances reported by every candidate (all or none: the candidate function decides per job).
-    const bool reported = !lb.luminance.empty() && std::all_of(lb.luminance.begin(), lb.luminance.end(),
-                                                               [](double v) { return v >= 0 && std::isfinite(v); });
-    if (reported) lb.luminanceEstimate = summarizeCandidates(lb.luminance);
-    else lb.luminance.clear();
+    if (!lb.luminance.empty()) lb.luminanceEstimate = summarizeCandidates(lb.luminance);
   };
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;

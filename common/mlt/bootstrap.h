@@ -39,7 +39,7 @@ using CandidateFnFactory = std::function<CandidateFn()>;
 // its work: the primary-sample numbers it drew (IndependentSource::reads), a deterministic measure of its
 // cost (a vertex draws a few numbers and traces a ray), which the budgeted sizing counts.
 constexpr uint32_t kNoBin = UINT32_MAX;
-// luminance (>= 0 where reported): the luminance of the candidate's path, which a relative target's c is not
+// luminance (BootstrapConfig::luminance): the luminance of the candidate's path, which a relative target's c is not
 // (importance.h): its mean estimates b_lum, the image's brightness, which the development keeps (develop.h
 // (D8)).
 struct CandidateInfo {
@@ -67,6 +67,9 @@ struct BootstrapConfig {
   // emission_estimate.h): their candidates only seed chains, so the budget (or the target) never grows
   // them; they keep the first round's count.
   std::vector<int> seedOnlyLengths;
+  // Keep each candidate's CandidateInfo::luminance and summarize it (LengthBootstrap::luminanceEstimate): a
+  // relative target's b_lum (develop.h (D8)). Binned bootstraps only.
+  bool luminance = false;
   // Cost the caller already spent from the budget (in the candidates' unit, numbers drawn; mmlt: b_1's
   // camera rays, kEmissionRayCost each), so that the whole bootstrap, not only its candidates, fits it.
   double spentCost = 0;
@@ -86,11 +89,11 @@ struct LengthBootstrap {
   std::vector<double> c;  // target value of each candidate
   std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
-  std::vector<double> luminance;  // each candidate's luminance where reported (CandidateInfo), else empty
+  std::vector<double> luminance;  // each candidate's luminance (BootstrapConfig::luminance), else empty
   // b (the mean), stdErr (from the kCandidateGroups group means), sampleVar (c's variance per candidate,
   // i.i.d. formula: a uniform sample's variance) and the tail split of develop.h (D3): what the plan keeps.
   BootstrapEstimate estimate;
-  BootstrapEstimate luminanceEstimate;  // the same summary of `luminance` (n = 0: not reported)
+  BootstrapEstimate luminanceEstimate;  // the same summary of `luminance` (n = 0: not kept)
   AliasTable table;       // over c; empty if b == 0
 };
 

@@ -11,17 +11,24 @@ int importanceTileSize(int width, int height) {
   return std::max(1, (side + kImportanceMaxTiles - 1) / kImportanceMaxTiles);
 }
 
-ImportanceMap importanceFromTileSums(int filmWidth, int filmHeight, const std::vector<double>& tileSums,
-                                     const std::vector<uint64_t>& tileCounts, double floor) {
-  if (filmWidth <= 0 || filmHeight <= 0) throw std::invalid_argument("importance map: empty film");
-  if (!(floor > 0 && std::isfinite(floor)))
-    throw std::invalid_argument("importance map: the floor must be positive and finite, got " + std::to_string(floor));
+ImportanceMap importanceGrid(int filmWidth, int filmHeight) {
+  if (filmWidth <= 0 || filmHeight <= 0)
+    throw std::invalid_argument("importance map: film size " + std::to_string(filmWidth) + "x" +
+                                std::to_string(filmHeight) + " must be positive");
   ImportanceMap m;
   m.filmWidth = filmWidth;
   m.filmHeight = filmHeight;
   m.tileSize = importanceTileSize(filmWidth, filmHeight);
   m.tilesX = (filmWidth + m.tileSize - 1) / m.tileSize;
   m.tilesY = (filmHeight + m.tileSize - 1) / m.tileSize;
+  return m;
+}
+
+ImportanceMap importanceFromTileSums(int filmWidth, int filmHeight, const std::vector<double>& tileSums,
+                                     const std::vector<uint64_t>& tileCounts, double floor) {
+  ImportanceMap m = importanceGrid(filmWidth, filmHeight);
+  if (!(floor > 0 && std::isfinite(floor)))
+    throw std::invalid_argument("importance map: the floor must be positive and finite, got " + std::to_string(floor));
   const size_t tiles = size_t(m.tilesX) * size_t(m.tilesY);
   if (tileSums.size() != tiles || tileCounts.size() != tiles)
     throw std::invalid_argument("importance map: " + std::to_string(tileSums.size()) + " tile sums and " +
@@ -66,8 +73,8 @@ void validateImportanceMap(const ImportanceMap& m, const char* field) {
   if (m.filmWidth <= 0 || m.filmHeight <= 0)
     throw std::invalid_argument(f + ": film size " + std::to_string(m.filmWidth) + "x" + std::to_string(m.filmHeight) +
                                 " must be positive");
-  const int T = importanceTileSize(m.filmWidth, m.filmHeight);
-  const int X = (m.filmWidth + T - 1) / T, Y = (m.filmHeight + T - 1) / T;
+  const ImportanceMap grid = importanceGrid(m.filmWidth, m.filmHeight);
+  const int T = grid.tileSize, X = grid.tilesX, Y = grid.tilesY;
   if (m.tileSize != T || m.tilesX != X || m.tilesY != Y)
     throw std::invalid_argument(f + ": tiles of " + std::to_string(m.tileSize) + " pixels, " + std::to_string(m.tilesX) +
                                 "x" + std::to_string(m.tilesY) + ", where the film takes " + std::to_string(T) + ", " +

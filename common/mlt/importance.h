@@ -55,6 +55,8 @@ struct ImportanceMap {
 
 // T for a film: the smallest tile size giving at most kImportanceMaxTiles tiles per axis.
 int importanceTileSize(int width, int height);
+// A film's tile grid: film size, T and tilesX x tilesY filled in, h empty (throws on an empty film).
+ImportanceMap importanceGrid(int filmWidth, int filmHeight);
 
 // (R2) from per-tile sums of the pilot's luminance samples and their counts (tilesX x tilesY, as
 // importanceTileSize makes them): g of a tile is the mean over it and its 8 neighbours (a 3 x 3 box of
