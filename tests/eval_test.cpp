@@ -71,9 +71,11 @@ TEST(EvalMetrics, TopShareSeesErrorConcentratedInAFewPixels) {
   EXPECT_LT(spread.topShare, 0.01);  // 4 of 4096 pixels, each at most ~3x the mean error
   std::vector<Color> confined = noisy;
   for (int i = 0; i < 3; ++i) confined[2000 + i] = Color(20, 20, 20);
+  confined[2001] = Color(30, 30, 30);
   const ImageMetrics m = computeMetrics(confined, ref);
+  EXPECT_EQ(m.worstPixel, 2001u);
   double expectedTop = 0;
-  for (int i = 0; i < 3; ++i) expectedTop += 3 * (19.5 * 19.5) / (0.25 + 1e-2);
+  for (double x : {20.0, 30.0, 20.0}) expectedTop += 3 * ((x - 0.5) * (x - 0.5)) / (0.25 + 1e-2);
   // the fourth worst pixel is a noisy one: its share is below 1e-3 of the total
   EXPECT_NEAR(m.topShare, expectedTop / (m.relMSE * 3 * 4096), 1e-3);
   EXPECT_GT(m.topShare, 0.9);
@@ -234,9 +236,14 @@ TEST(EvalStability, ConcentratedErrorRunIsFlagged) {
     r.metrics.pixels = 256 * 256;
   }
   runs[1].metrics.topShare = 0.85;
+  runs[1].metrics.worstPixel = 10 * 256 + 3;
   StabilityReport rep = analyzeStability(runs, {});
   ASSERT_EQ(runs[1].flags.size(), 1u);
-  EXPECT_EQ(runs[1].flags[0].rfind("concentrated:85% of the error in 4 pixels", 0), 0u) << runs[1].flags[0];
+  EXPECT_EQ(runs[1].flags[0], "concentrated:85% of the error in 4 pixels");  // the film's width unknown
+  runs[1].width = 256;
+  rep = analyzeStability(runs, {});
+  ASSERT_EQ(runs[1].flags.size(), 1u);
+  EXPECT_EQ(runs[1].flags[0], "concentrated:85% of the error in 4 pixels, the worst at (3, 10)");
   for (size_t i = 0; i < runs.size(); ++i) {
     if (i != 1) {
       EXPECT_TRUE(runs[i].flags.empty()) << i << ": " << runs[i].flags[0];

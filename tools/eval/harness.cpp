@@ -253,6 +253,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
       rec.work = isMarkovChainMethod(ms.method) ? rs.mutationsPerPixel : double(rs.spp);
       rec.samples = out.samples;
       rec.metrics = computeMetrics(out.image, ref.image, cfg.eps);
+      rec.width = ref.info.width;
       rec.markovChain = isMarkovChainMethod(ms.method);
       if (rec.markovChain) {
         rec.proposedPerLength = out.stats.proposedPerLength;

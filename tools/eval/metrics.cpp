@@ -56,6 +56,7 @@ ImageMetrics computeMetrics(const std::vector<Color>& image, const std::vector<C
     return m;
   }
   m.relMSE = sumRel / double(n);
+  m.worstPixel = uint64_t(std::max_element(pixelRel.begin(), pixelRel.end()) - pixelRel.begin());
   const size_t top = std::min(pixelRel.size(), size_t(kTopPixels));
   std::partial_sort(pixelRel.begin(), pixelRel.begin() + std::ptrdiff_t(top), pixelRel.end(), std::greater<>());
   double sumTop = 0;

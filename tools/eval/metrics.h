@@ -30,6 +30,7 @@ struct ImageMetrics {
   double relMSE = 0, mse = 0, mae = 0;
   double topShare = 0;    // of relMSE, in the kTopPixels worst pixels
   uint64_t pixels = 0;    // of the image
+  uint64_t worstPixel = 0;  // index (y * width + x) of the pixel with the largest relative error
   double meanErr = 0;     // relative, signed
   double mean = 0;        // mean of the rendered image (over pixels and channels)
   double refMean = 0;

@@ -32,6 +32,7 @@ struct RunRecord {
   std::vector<std::string> kinds;  // the method's mutation kinds, index of proposedPerKind
   std::vector<uint64_t> proposedPerKind, acceptedPerKind;
   int chains = 0, stuckChains = 0;  // chains with acceptance below the stuck threshold
+  int width = 0;                    // of the film, to name a pixel in a flag (not in runs.csv; 0 when unknown)
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
 };
 

@@ -78,10 +78,18 @@ void flagStuck(RunRecord& r, const StabilityConfig& cfg) {
   if (!where.empty()) r.flags.push_back("stuck:" + where);
 }
 
+// ", the worst at (x, y)", so that the pixels can be looked at in the run's image; nothing when the film's
+// width is unknown (a record read back from runs.csv, whose flags column keeps the text of the first analysis).
+std::string worstPixelText(const RunRecord& r) {
+  if (r.width <= 0) return {};
+  return fmt::format(", the worst at ({}, {})", r.metrics.worstPixel % uint64_t(r.width),
+                     r.metrics.worstPixel / uint64_t(r.width));
+}
+
 void flagConcentrated(RunRecord& r, const StabilityConfig& cfg) {
   if (r.metrics.topShare >= cfg.concentratedShare && r.metrics.pixels >= cfg.concentratedMinPixels)
-    r.flags.push_back(fmt::format("concentrated:{:.0f}% of the error in {} pixels", 100 * r.metrics.topShare,
-                                  kTopPixels));
+    r.flags.push_back(fmt::format("concentrated:{:.0f}% of the error in {} pixels{}", 100 * r.metrics.topShare,
+                                  kTopPixels, worstPixelText(r)));
 }
 
 }  // namespace
