@@ -84,6 +84,10 @@
 //    of the shadow ray's offset along the normal: the same points, and a verdict that differs in a few
 //    samples in ten thousand (tests/sphere_light_test.cpp), one of them in this chain. Every other digest
 //    unchanged.
+//  - pt and bdpt on every scene, and the chain methods whose plan has a direct pass (pssmlt-bdpt, mmlt,
+//    rjmlt on cornell-box and cornell-variety, veach-mlt on cornell-box): a camera sample's position in
+//    its pixel is the pixel's Sobol point (sobolPixelPoint, sample_job.h) instead of two hashed numbers.
+//    lt (no camera samples) and the chains themselves unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -229,35 +233,35 @@ TEST_P(GoldenImages, DigestMatches) {
 // Recorded on f92bac3 (x86-64, gcc, the Release flags of CMakeLists.txt); unchanged by the move of the
 // interfaces to common/interfaces (37ad07d). Another compiler or -march may round differently.
 const Case kCases[] = {
-    Case{"cornell-box", "pt", "ea3370e2cc417deef459e000659fd68847d7acc25be4328637372e6cb878fd86"},
+    Case{"cornell-box", "pt", "49345801ed0f37a9c77aaa01b77a84f0247fa1be9b2ae9a685b681dcbf433a6c"},
     Case{"cornell-box", "lt", "aac1d685dbcbddd5940fe1adc62a37adce95225788e2baf91d2b8172fc75016b"},
-    Case{"cornell-box", "bdpt", "adf1acc31bfa2d30d0eada5d757155175fa2dc7d99a403b35f727e7da13933bf"},
+    Case{"cornell-box", "bdpt", "ae0358f74b9772b87f2a5a9a3322f522d5e674c098dfb57f46b42a25a0c6e9e4"},
     Case{"cornell-box", "pssmlt", "3b5e17ca6842106c16947553d3d0191a194e2e475ef08af3fa96cb9f103e7405"},
-    Case{"cornell-box", "pssmlt-bdpt", "73fcc5e4b9546ce234d66f9b60f527c0457d3053c8c8cb4cdd75c38243692dbb"},
-    Case{"cornell-box", "mmlt", "c62fd550c5932456ac9e60e0b990998558df1be4ec068706439942ec58dab64d"},
-    Case{"caustic-mirror", "pt", "de5c83ebb199c4a8682742d6e198d5f9628cbad8f492b8eb96f7c70efc65127d"},
+    Case{"cornell-box", "pssmlt-bdpt", "671e468962476209c008b870eef0be4fcf8b6988382ddfb9a86cc1e59553ffcc"},
+    Case{"cornell-box", "mmlt", "68d3de8e6964baf7083034f68da9a401c543c840bdc7a2cf9719c913c280abcc"},
+    Case{"caustic-mirror", "pt", "fdb2510969422b355100d947eeaeb36e9c1915032797b7284799d57a65bab618"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
-    Case{"caustic-mirror", "bdpt", "585fed3221fc00cc6785bdc64a6c7c2b53346b1238cf6eff02b0e17036a46377"},
+    Case{"caustic-mirror", "bdpt", "bf6c6ddb7518110d2ed686e0d7bdee372e1400b5dd092da72276d6574e16fec6"},
     Case{"caustic-mirror", "pssmlt", "9abbf4f23a18e33a7d88cabf8fbdc3cb68875564bb7a27d8885043fe9462eb94"},
     Case{"caustic-mirror", "pssmlt-bdpt", "5d6b1b80611af77a495245d15b600364236383cb8f5cab7a52c328de337883fa"},
     Case{"caustic-mirror", "mmlt", "0f021744e31bbc2445f7488676259b189cb693b08b333999edf890e8a7a228d9"},
-    Case{"glossy-plates", "pt", "973edcdedd8ad8e3ba0afa3ca2334ea7fd314ef25ad074264ef7f1ff71d3a2d0"},
+    Case{"glossy-plates", "pt", "cd92894675c97af4e6e5d83c964e939584796ff3cf62b2ef371474b2377fddcf"},
     Case{"glossy-plates", "lt", "30c49b64e9e3551e9215d5e0c4f9e8a239c65302411f35664ba18e8ca1bb1d04"},
-    Case{"glossy-plates", "bdpt", "d0d185613ea5412571ddcb04fbde5d55f65f008f55c5e0f1248563eb262a8c58"},
+    Case{"glossy-plates", "bdpt", "3d058b3268176812904364d0ec551f8e6e190e97e6f32daba91003fe8b852920"},
     Case{"glossy-plates", "pssmlt", "9d3c3dee6ac804af007e5d8939abe00f1595350522e6ed49b87371819efae27b"},
     Case{"glossy-plates", "pssmlt-bdpt", "a07c5f4e8101e630ad563f0607a7541cc3cf39602b6fedeaa925375c2c037fa7"},
     Case{"glossy-plates", "mmlt", "10ade88c6b5112cf07d007e59dbe43c8653bc6611bde044d2a634415b60ea63e"},
-    Case{"cornell-variety", "pt", "26873108e60b97e48986560bfac8ea037b6f8323e9a0265cf15f645ba43bcef1"},
+    Case{"cornell-variety", "pt", "3d9d557ab4f7a6b5dd87016da6a8467dbb772905e49e2c5c66de04b00a41fab2"},
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
-    Case{"cornell-variety", "bdpt", "f82d82cb88ada1eeaaec3d3a97b0f1f9e8b3593a5886d70b94dd83fb217f8ba6"},
+    Case{"cornell-variety", "bdpt", "da9c615baf953d5d20ac305d1d741c50d6d3c9c03821638ebf09712c52dbb323"},
     Case{"cornell-variety", "pssmlt", "19a4dd05d795f194fc42d7a91cee09443ebb962a49333d8c844f5c5715995cd4"},
-    Case{"cornell-variety", "pssmlt-bdpt", "e78e2ca61fa313a8795d26c64954a54edf8c35238c7dabb9430012f4b88c028f"},
-    Case{"cornell-variety", "mmlt", "35e0abe38e95e5fc4d5806caf453d1902107eff972e8f169780d0ecec046d799"},
-    Case{"cornell-box", "rjmlt", "a2300e6b068e26a6b1b39f34501fe88a71db08385fe3c10d8a9f5478f675bad2"},
+    Case{"cornell-variety", "pssmlt-bdpt", "45ed14c33bdd83985409816878b033a1e76e1503d2a0629e9168b795f302ac76"},
+    Case{"cornell-variety", "mmlt", "92a50d3ac9d1a554ed2b2a1fabec665e7ecaed3be5a4e1653aad298201873056"},
+    Case{"cornell-box", "rjmlt", "29d482c33ecedc43dda96b54cbc9259de86680c747252e0ebb2cb83638b8dfa8"},
     Case{"caustic-mirror", "rjmlt", "5172691fa049dcbd3a58de609c25a5cb6932afbc53b538b6fa011a2c3b51322c"},
     Case{"glossy-plates", "rjmlt", "fa4bcb3b5769aede0ed64f81d3ed5cd0b6729051b73dabb513fc236f4e8f698e"},
-    Case{"cornell-variety", "rjmlt", "49d5142ed02d332eb612d02219f41bc306dcdf10eaaff5a9f18347df57191658"},
-    Case{"cornell-box", "veach-mlt", "3c0dcdad354726d0448653d84fbd27e4ef72a2d76328535ee4b6d31d5d03051b"},
+    Case{"cornell-variety", "rjmlt", "259ee0e6288db0f62d3800cf63766455e0ff1332679678ca8c9896eda46b4d8b"},
+    Case{"cornell-box", "veach-mlt", "2f0d4779269e0cf7865c2e2fdd232c6bf6fb663b6935f2523aebf902e0773f8f"},
     Case{"caustic-mirror", "veach-mlt", "30b75a0bd5286ec3c752cde7b88dc34278a19d51d552edd09ebe64f95e8f711e"},
     Case{"glossy-plates", "veach-mlt", "4d573470796b895e36119a8d478306bfc795e59c2299683245f067d238d31c9f"},
     // cornell-variety has a directional light, which veach-mlt refuses with a clear error (area, point and

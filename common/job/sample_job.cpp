@@ -117,6 +117,8 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
               source.reset(key, i);
               if (sampling && sampling->stratified)
                 source.setPixelPoint(stratifiedPixelPoint(key, uint32_t(i), uint32_t(s.spp) * m));
+              else if (!lightTracing && !(sampling && sampling->hashed))
+                source.setPixelPoint(sobolPixelPoint(key, uint32_t(i)));
               const Vec2 pixel{float(x), float(y)};
               contribution.clear();
               evaluator.evaluate(source, &pixel, contribution);

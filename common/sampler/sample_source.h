@@ -23,6 +23,8 @@
 // A fixed block size per vertex is what lets a reversible-jump chain rewrite vertex i alone.
 // -----------------------------------------------------------------------------------------------
 #pragma once
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -165,6 +167,36 @@ inline Vec2 stratifiedPixelPoint(uint64_t key, uint32_t k, uint32_t n) {
     if (!(out[a] < 1.0f)) out[a] = 0.0f;
   }
   return {out[0], out[1]};
+}
+
+// Sample k of one pixel's endless sequence, for renders whose samples per pixel are not known in advance
+// (a time budget stops anywhere): the first two dimensions of Sobol's sequence (the radical inverse of k
+// in base 2, and the second dimension's generator, the Pascal matrix mod 2), each XORed with a random
+// 32-bit mask of `key` (a random digital shift). Each point is uniform on its own (the mask is), so a
+// pixel's mean of any set of its samples stays unbiased; the shift keeps the net structure, so every
+// prefix of 2^m points is a (0, m, 2)-net (one point in every 2^a x 2^(m-a) box of the pixel) and the
+// points a budget stops at cover the pixel evenly: where an edge crosses the pixel the mean's variance
+// falls about as n^-1.5 instead of n^-1.
+inline Vec2 sobolPixelPoint(uint64_t key, uint32_t k) {
+  uint32_t bits = k;  // radical inverse in base 2: the bits of k reversed
+  bits = (bits << 16) | (bits >> 16);
+  bits = ((bits & 0x00ff00ffu) << 8) | ((bits & 0xff00ff00u) >> 8);
+  bits = ((bits & 0x0f0f0f0fu) << 4) | ((bits & 0xf0f0f0f0u) >> 4);
+  bits = ((bits & 0x33333333u) << 2) | ((bits & 0xccccccccu) >> 2);
+  bits = ((bits & 0x55555555u) << 1) | ((bits & 0xaaaaaaaau) >> 1);
+  // Sobol's second dimension: the XOR of the direction numbers of k's set bits, v_0 = 2^31,
+  // v_(b+1) = v_b ^ (v_b >> 1).
+  constexpr auto kDirections = [] {
+    std::array<uint32_t, 32> v{};
+    v[0] = 1u << 31;
+    for (size_t b = 1; b < v.size(); ++b) v[b] = v[b - 1] ^ (v[b - 1] >> 1);
+    return v;
+  }();
+  uint32_t second = 0;
+  for (uint32_t i = k; i != 0; i &= i - 1) second ^= kDirections[size_t(std::countr_zero(i))];
+  const uint32_t x = bits ^ uint32_t(hashKeys(key, 0x736f626cULL, 0) >> 32);
+  const uint32_t y = second ^ uint32_t(hashKeys(key, 0x736f626cULL, 1) >> 32);
+  return {float(x >> 8) * 0x1p-24f, float(y >> 8) * 0x1p-24f};  // 24 bits: exact in a float, below 1
 }
 
 // A fixed vector per stream; reads past the end return `fill`. For tests and for replaying a path.
