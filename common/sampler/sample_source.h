@@ -147,17 +147,23 @@ inline float candidateCoordinate(uint64_t seed, uint64_t candidate, int axis) {
   return out < 1.0f ? out : 0.0f;
 }
 
-// Sample k of n of one pixel, spread over the pixel: the Hammersley point ((k + 1/2) / n, radical inverse
-// of k in base 2), shifted modulo 1 by a random offset of `key` (Cranley-Patterson rotation). Each point
-// is uniform on its own, so a pixel's mean stays unbiased, and the n points cover the pixel evenly: where
-// an edge crosses the pixel the mean's variance falls about as n^-1.5 instead of n^-1.
-inline Vec2 stratifiedPixelPoint(uint64_t key, uint32_t k, uint32_t n) {
-  uint32_t bits = k;  // radical inverse in base 2: the bits of k reversed
+// The bits of k in reverse order: the radical inverse of k in base 2, times 2^32.
+inline uint32_t reversedBits(uint32_t k) {
+  uint32_t bits = k;
   bits = (bits << 16) | (bits >> 16);
   bits = ((bits & 0x00ff00ffu) << 8) | ((bits & 0xff00ff00u) >> 8);
   bits = ((bits & 0x0f0f0f0fu) << 4) | ((bits & 0xf0f0f0f0u) >> 4);
   bits = ((bits & 0x33333333u) << 2) | ((bits & 0xccccccccu) >> 2);
   bits = ((bits & 0x55555555u) << 1) | ((bits & 0xaaaaaaaau) >> 1);
+  return bits;
+}
+
+// Sample k of n of one pixel, spread over the pixel: the Hammersley point ((k + 1/2) / n, radical inverse
+// of k in base 2), shifted modulo 1 by a random offset of `key` (Cranley-Patterson rotation). Each point
+// is uniform on its own, so a pixel's mean stays unbiased, and the n points cover the pixel evenly: where
+// an edge crosses the pixel the mean's variance falls about as n^-1.5 instead of n^-1.
+inline Vec2 stratifiedPixelPoint(uint64_t key, uint32_t k, uint32_t n) {
+  const uint32_t bits = reversedBits(k);
   const double p[2] = {(double(k) + 0.5) / double(n), double(bits) * 0x1p-32};
   float out[2];
   for (int a = 0; a < 2; ++a) {
@@ -178,12 +184,7 @@ inline Vec2 stratifiedPixelPoint(uint64_t key, uint32_t k, uint32_t n) {
 // points a budget stops at cover the pixel evenly: where an edge crosses the pixel the mean's variance
 // falls about as n^-1.5 instead of n^-1.
 inline Vec2 sobolPixelPoint(uint64_t key, uint32_t k) {
-  uint32_t bits = k;  // radical inverse in base 2: the bits of k reversed
-  bits = (bits << 16) | (bits >> 16);
-  bits = ((bits & 0x00ff00ffu) << 8) | ((bits & 0xff00ff00u) >> 8);
-  bits = ((bits & 0x0f0f0f0fu) << 4) | ((bits & 0xf0f0f0f0u) >> 4);
-  bits = ((bits & 0x33333333u) << 2) | ((bits & 0xccccccccu) >> 2);
-  bits = ((bits & 0x55555555u) << 1) | ((bits & 0xaaaaaaaau) >> 1);
+  const uint32_t bits = reversedBits(k);
   // Sobol's second dimension: the XOR of the direction numbers of k's set bits, v_0 = 2^31,
   // v_(b+1) = v_b ^ (v_b >> 1).
   constexpr auto kDirections = [] {
