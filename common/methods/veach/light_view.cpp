@@ -10,6 +10,7 @@
 #include "common/methods/veach/path.h"
 #include "common/mlt/develop.h"
 #include "common/render/render_scene.h"
+#include "common/sampler/sample_source.h"
 
 namespace mlt::veach {
 
@@ -126,7 +127,9 @@ void renderLightViews(const PathSpace& space, const JobPlan& plan, const WorkUni
     const uint64_t pixel = permutedPixel(i, P, a);
     const float x = float(pixel % uint64_t(W)), y = float(pixel / uint64_t(W));
     Pcg32 rng(hashKeys(plan.settings.seed, i), kStream);
-    const Vec2 jitter = rng.uniform2();
+    // Pixel j's samples are k = i / P = 0 .. sppLV - 1: its Sobol points, stratified over the pixel (a light's
+    // outline is what this pass renders).
+    const Vec2 jitter = sobolPixelPoint(hashKeys(plan.settings.seed, kStream, pixel), uint32_t(i / P));
     const Color L = lightViewRadiance(space, Vec2(x + jitter.x, y + jitter.y), rng);
     // The pixel's centre names the pixel (a jittered point near a large film's edge can round into the
     // next pixel in float); non-finite values are counted and dropped there, as every splat's.

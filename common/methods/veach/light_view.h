@@ -17,8 +17,9 @@
 // The pass: sppLV = max(1, round(ratio x mutations per pixel)) samples per pixel (ratio: the parameter
 // veach-light-view, 0 = off, the chains then carry these paths as before). Its N = P sppLV samples are
 // numbered i = 0 .. N - 1; sample i lies in pixel (i a) mod P (a coprime to P, so every pixel gets exactly
-// sppLV of them, spread over the film in index order) and draws its film jitter, lens point and lobe
-// choices from a generator seeded by (job seed, i) alone. The chains carry them: the chain of global
+// sppLV of them, spread over the film in index order), at the pixel's Sobol point k = i / P
+// (sobolPixelPoint: a pixel's sppLV samples stratified over it), and draws its lens point and lobe choices
+// from a generator seeded by (job seed, i) alone. The chains carry them: the chain of global
 // mutations [C_u, C_u + M_u) (C_u: the mutations of the chains before it, M in all) takes samples
 // [ceil(C_u N / M), ceil((C_u + M_u) N / M)), so the pass's cost follows each chain's length (a time
 // budget's throughput trial, running prefixes of chains, measures it with them) and the ranges tile
