@@ -182,6 +182,38 @@ TEST(Exr, ErrorsNameTheFile) {
   EXPECT_NE(e.find("reserved"), std::string::npos) << e;
 }
 
+// A damaged header: an attribute that declares 1.9 GB in a file of a few hundred bytes is refused before
+// OpenEXR allocates it, in a single-part file and in one whose version field says multi-part (a flipped bit
+// the fuzz test found: that path was left to OpenEXR, which allocated the 1.9 GB).
+TEST(Exr, AnAttributeLargerThanTheFileIsRefusedBeforeItIsRead) {
+  const std::string good = tempPath("header_good.exr");
+  writeExr(good, 2, 2, std::vector<Color>(4, Color(1)), {});
+  std::ifstream in(good, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The first attribute: name\0 type\0 then its int32 size.
+  const size_t nameEnd = bytes.find('\0', 8), typeEnd = bytes.find('\0', nameEnd + 1);
+  ASSERT_NE(typeEnd, std::string::npos);
+  const uint32_t huge = 0x6f630000u;
+  for (bool multiPart : {false, true}) {
+    std::string damaged = bytes;
+    std::memcpy(&damaged[typeEnd + 1], &huge, 4);  // little-endian, as the file is
+    if (multiPart) damaged[5] = char(uint8_t(damaged[5]) | 0x10);
+    const std::string path = tempPath(multiPart ? "header_multipart.exr" : "header_huge.exr");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
+    const std::string e = errorOf([&] { readExr(path); });
+    EXPECT_NE(e.find(path), std::string::npos) << e;
+    EXPECT_NE(e.find("declares 1868759040 bytes"), std::string::npos) << multiPart << ": " << e;
+    EXPECT_NE(errorOf([&] { readFilmExr(path); }).find("declares"), std::string::npos) << multiPart;
+  }
+  // A real multi-part list that never ends (the bit set on a single-part file whose header is followed by
+  // its offset table) is refused with a clear error or read as OpenEXR reads it, never by a huge allocation.
+  std::string flipped = bytes;
+  flipped[5] = char(uint8_t(flipped[5]) | 0x10);
+  const std::string path = tempPath("header_flipped.exr");
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << flipped;
+  EXPECT_NE(errorOf([&] { readExr(path); }), "");
+}
+
 TEST(Exr, MissingOrBadChannelIsReported) {
   // Hand-made files that carry the partial-film tag but lack a raw channel or have a wrong type.
   auto writeTagged = [](const std::string& path, Imf::PixelType countLoType, bool withCountLo) {

@@ -88,9 +88,11 @@ ImageMetadata readMetadata(const Imf::Header& header, bool keepInternal) {
 
 // OpenEXR allocates each header attribute's value at the size the file declares before reading it, so a
 // damaged or hostile file could make it take gigabytes (seen by the fuzz test under AddressSanitizer: a
-// 1 GB attribute in a 2 KB file). Walks the single-part header (magic, version, then name\0 type\0 int32
-// size value, up to an empty name) and refuses any attribute larger than the rest of the file or 64 MiB,
-// before OpenEXR reads it. Multi-part files are left to OpenEXR (the film files are single-part).
+// 1 GB attribute in a 2 KB file). Walks the header (magic, version, then name\0 type\0 int32 size value,
+// up to an empty name; a multi-part file has one such header per part and ends the list with an empty
+// header) and refuses any attribute larger than the rest of the file or 64 MiB, before OpenEXR reads it.
+// (Multi-part files used to be left to OpenEXR: one flipped bit in the version field then let a damaged
+// film declare a 1.9 GB attribute, again seen by the fuzz test.)
 void checkHeaderSizes(const std::string& path) {
   constexpr uint64_t kMaxAttribute = 64ull << 20;
   std::ifstream in(path, std::ios::binary);
@@ -98,7 +100,7 @@ void checkHeaderSizes(const std::string& path) {
   const uint64_t fileSize = std::filesystem::file_size(path);
   char start[8];
   if (!in.read(start, 8)) fail(path, "too short for an OpenEXR header");
-  if (uint8_t(start[5]) & 0x10) return;  // multi-part
+  const bool multiPart = uint8_t(start[5]) & 0x10;
   uint64_t pos = 8;
   auto readString = [&](const char* what) {
     std::string sv;
@@ -113,7 +115,11 @@ void checkHeaderSizes(const std::string& path) {
   for (int n = 0;; ++n) {
     if (n > 100000) fail(path, "header: more than 100000 attributes");
     const std::string name = readString("name");
-    if (name.empty()) return;
+    if (name.empty()) {  // the end of a header
+      if (!multiPart || in.peek() == '\0') return;  // single part, or the empty header that ends the list
+      if (in.peek() == std::char_traits<char>::eof()) fail(path, "header: the list of parts does not end");
+      continue;  // the next part's header
+    }
     readString("type");
     unsigned char sz[4];
     if (!in.read(reinterpret_cast<char*>(sz), 4)) fail(path, "header: ends inside attribute " + name.substr(0, 64));
