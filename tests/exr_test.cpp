@@ -183,9 +183,10 @@ TEST(Exr, ErrorsNameTheFile) {
 }
 
 // A damaged header: an attribute that declares 1.9 GB in a file of a few hundred bytes is refused before
-// OpenEXR allocates it, in a single-part file and in one whose version field says multi-part (a flipped bit
-// the fuzz test found: that path was left to OpenEXR, which allocated the 1.9 GB).
-TEST(Exr, AnAttributeLargerThanTheFileIsRefusedBeforeItIsRead) {
+// OpenEXR allocates it, in a single-part file and in one whose version field says multi-part; and so is a
+// value whose declared size is not what OpenEXR's reader of its type takes (the fuzz test: a channel list
+// lengthened by a mutation made OpenEXR read a later size from the bytes "\0\0co", 1.9 GB).
+TEST(Exr, AHeaderOpenExrWouldMisreadIsRefusedBeforeItIsRead) {
   const std::string good = tempPath("header_good.exr");
   writeExr(good, 2, 2, std::vector<Color>(4, Color(1)), {});
   std::ifstream in(good, std::ios::binary);
@@ -204,6 +205,33 @@ TEST(Exr, AnAttributeLargerThanTheFileIsRefusedBeforeItIsRead) {
     EXPECT_NE(e.find(path), std::string::npos) << e;
     EXPECT_NE(e.find("declares 1868759040 bytes"), std::string::npos) << multiPart << ": " << e;
     EXPECT_NE(errorOf([&] { readFilmExr(path); }).find("declares"), std::string::npos) << multiPart;
+  }
+  // A fixed-size value whose declared size is another (OpenEXR reads the type's size and would go on from
+  // there): compression, 1 byte, declared 5.
+  {
+    std::string damaged = bytes;
+    const size_t at = damaged.find(std::string("compression\0compression\0", 24));
+    ASSERT_NE(at, std::string::npos);
+    const uint32_t five = 5;
+    std::memcpy(&damaged[at + 24], &five, 4);
+    const std::string path = tempPath("header_fixed.exr");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
+    const std::string e = errorOf([&] { readExr(path); });
+    EXPECT_NE(e.find("'compression' of type compression declares 5 bytes but its value takes 1"), std::string::npos) << e;
+  }
+  // A channel list longer than it declares (a mutation that copied channel names past its end).
+  {
+    std::string damaged = bytes;
+    const size_t at = damaged.find(std::string("channels\0chlist\0", 16));
+    ASSERT_NE(at, std::string::npos);
+    uint32_t size = 0;
+    std::memcpy(&size, &damaged[at + 16], 4);
+    size -= 18;  // the last channel (a one-letter name, its terminator and 16 bytes) outside the declared size
+    std::memcpy(&damaged[at + 16], &size, 4);
+    const std::string path = tempPath("header_chlist.exr");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
+    const std::string e = errorOf([&] { readExr(path); });
+    EXPECT_NE(e.find("'channels' of type chlist declares"), std::string::npos) << e;
   }
   // A real multi-part list that never ends (the bit set on a single-part file whose header is followed by
   // its offset table) is refused with a clear error or read as OpenEXR reads it, never by a huge allocation.

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <set>
 
@@ -91,8 +92,15 @@ ImageMetadata readMetadata(const Imf::Header& header, bool keepInternal) {
 // 1 GB attribute in a 2 KB file). Walks the header (magic, version, then name\0 type\0 int32 size value,
 // up to an empty name; a multi-part file has one such header per part and ends the list with an empty
 // header) and refuses any attribute larger than the rest of the file or 64 MiB, before OpenEXR reads it.
-// (Multi-part files used to be left to OpenEXR: one flipped bit in the version field then let a damaged
-// film declare a 1.9 GB attribute, again seen by the fuzz test.)
+// Multi-part files used to be left to OpenEXR, and names were allowed 255 bytes whatever the flags.
+// The value sizes of OpenEXR's fixed-size attribute types (ImfStandardAttributes and the Imf*Attribute
+// readers of OpenEXR 3.1).
+const std::map<std::string, uint64_t> kFixedAttributeSizes = {
+    {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"double", 8}, {"envmap", 1}, {"float", 4}, {"int", 4},
+    {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64}, {"m44d", 128}, {"rational", 8},
+    {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12}, {"v3d", 24},
+    {"deepImageState", 1}, {"chromaticities", 32}};
+
 void checkHeaderSizes(const std::string& path) {
   constexpr uint64_t kMaxAttribute = 64ull << 20;
   std::ifstream in(path, std::ios::binary);
@@ -101,16 +109,27 @@ void checkHeaderSizes(const std::string& path) {
   char start[8];
   if (!in.read(start, 8)) fail(path, "too short for an OpenEXR header");
   const bool multiPart = uint8_t(start[5]) & 0x10;
+  // Names and type names: at most 31 bytes, 255 with the long-names flag. OpenEXR reads that many and goes
+  // on with the next byte whether or not it was the terminator, so a longer one would make it read the
+  // next size from other bytes than this walk does (the fuzz test: a size of 0x6f630000, "\0\0co").
+  const size_t maxName = (uint8_t(start[5]) & 0x04) ? 255 : 31;
   uint64_t pos = 8;
   auto readString = [&](const char* what) {
     std::string sv;
     for (char c; in.get(c);) {
       ++pos;
       if (c == '\0') return sv;
-      if (sv.size() >= 255) fail(path, fmt::format("header: {} longer than 255 bytes at offset {}", what, pos));
+      if (sv.size() >= maxName)
+        fail(path, fmt::format("header: {} longer than {} bytes at offset {}", what, maxName, pos));
       sv += c;
     }
     fail(path, fmt::format("header: ends inside an attribute {}", what));
+  };
+  auto readU32 = [&](const std::string& name) {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), 4)) fail(path, "header: ends inside attribute " + name.substr(0, 64));
+    pos += 4;
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
   };
   for (int n = 0;; ++n) {
     if (n > 100000) fail(path, "header: more than 100000 attributes");
@@ -120,16 +139,35 @@ void checkHeaderSizes(const std::string& path) {
       if (in.peek() == std::char_traits<char>::eof()) fail(path, "header: the list of parts does not end");
       continue;  // the next part's header
     }
-    readString("type");
-    unsigned char sz[4];
-    if (!in.read(reinterpret_cast<char*>(sz), 4)) fail(path, "header: ends inside attribute " + name.substr(0, 64));
-    pos += 4;
-    const uint32_t size = uint32_t(sz[0]) | uint32_t(sz[1]) << 8 | uint32_t(sz[2]) << 16 | uint32_t(sz[3]) << 24;
+    const std::string type = readString("type");
+    const uint32_t size = readU32(name);
     if (size > kMaxAttribute || pos + size > fileSize)
       fail(path, fmt::format("header: attribute '{}' declares {} bytes (the file has {} after it)", name.substr(0, 64),
                              size, fileSize - std::min(fileSize, pos)));
-    in.seekg(std::streamoff(size), std::ios::cur);
-    pos += size;
+    // OpenEXR reads a value of a known type by the type, not by the declared size, and goes on from where
+    // that left it: a size other than what the type reads would make it parse the rest of the header from
+    // other bytes than this walk does. So the two must agree.
+    const uint64_t start = pos;
+    uint64_t reads = size;
+    if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
+      reads = fixed->second;
+    } else if (type == "chlist") {  // channels: name\0 and 16 bytes each, up to an empty name
+      reads = 0;
+      for (std::string channel = readString("channel name"); !channel.empty(); channel = readString("channel name")) {
+        in.seekg(16, std::ios::cur);
+        pos += 16;
+        if (pos - start > size) break;
+      }
+      reads = pos - start;
+    } else if (type == "preview") {  // width, height, then 4 bytes a pixel
+      const uint64_t w = readU32(name), h = readU32(name);
+      reads = 8 + 4 * w * h;
+    }
+    if (reads != size)
+      fail(path, fmt::format("header: attribute '{}' of type {} declares {} bytes but its value takes {}",
+                             name.substr(0, 64), type.substr(0, 64), size, reads));
+    in.seekg(std::streamoff(start + size), std::ios::beg);
+    pos = start + size;
   }
 }
 
