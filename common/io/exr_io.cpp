@@ -161,7 +161,7 @@ void checkHeaderSizes(const std::string& path) {
       reads = pos - start;
     } else if (type == "preview") {  // width, height, then 4 bytes a pixel
       const uint64_t w = readU32(name), h = readU32(name);
-      reads = 8 + 4 * w * h;
+      reads = w * h <= kMaxAttribute ? 8 + 4 * w * h : ~uint64_t(0);  // no wrap-around to a size that matches
     }
     if (reads != size)
       fail(path, fmt::format("header: attribute '{}' of type {} declares {} bytes but its value takes {}",
