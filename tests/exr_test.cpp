@@ -191,55 +191,49 @@ TEST(Exr, AHeaderOpenExrWouldMisreadIsRefusedBeforeItIsRead) {
   writeExr(good, 2, 2, std::vector<Color>(4, Color(1)), {});
   std::ifstream in(good, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // The first attribute: name\0 type\0 then its int32 size.
-  const size_t nameEnd = bytes.find('\0', 8), typeEnd = bytes.find('\0', nameEnd + 1);
-  ASSERT_NE(typeEnd, std::string::npos);
-  const uint32_t huge = 0x6f630000u;
+  // Writes `damaged` as `name` and returns readExr's error (and the file's path).
+  auto readDamaged = [&](const std::string& damaged, const std::string& name) {
+    const std::string path = tempPath(name);
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
+    return std::make_pair(errorOf([&] { readExr(path); }), path);
+  };
+  // The 32-bit size field after an attribute's name\0type\0.
+  auto setSize = [](std::string& b, const std::string& nameAndType, auto change) {
+    const size_t at = b.find(nameAndType);
+    if (at == std::string::npos) return false;
+    uint32_t size = 0;
+    std::memcpy(&size, &b[at + nameAndType.size()], 4);  // little-endian, as the file is
+    size = change(size);
+    std::memcpy(&b[at + nameAndType.size()], &size, 4);
+    return true;
+  };
+  const std::string channels("channels\0chlist\0", 16);
   for (bool multiPart : {false, true}) {
     std::string damaged = bytes;
-    std::memcpy(&damaged[typeEnd + 1], &huge, 4);  // little-endian, as the file is
+    ASSERT_TRUE(setSize(damaged, channels, [](uint32_t) { return 0x6f630000u; }));
     if (multiPart) damaged[5] = char(uint8_t(damaged[5]) | 0x10);
-    const std::string path = tempPath(multiPart ? "header_multipart.exr" : "header_huge.exr");
-    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
-    const std::string e = errorOf([&] { readExr(path); });
+    const auto [e, path] = readDamaged(damaged, multiPart ? "header_multipart.exr" : "header_huge.exr");
     EXPECT_NE(e.find(path), std::string::npos) << e;
     EXPECT_NE(e.find("declares 1868759040 bytes"), std::string::npos) << multiPart << ": " << e;
     EXPECT_NE(errorOf([&] { readFilmExr(path); }).find("declares"), std::string::npos) << multiPart;
   }
   // A fixed-size value whose declared size is another (OpenEXR reads the type's size and would go on from
   // there): compression, 1 byte, declared 5.
-  {
-    std::string damaged = bytes;
-    const size_t at = damaged.find(std::string("compression\0compression\0", 24));
-    ASSERT_NE(at, std::string::npos);
-    const uint32_t five = 5;
-    std::memcpy(&damaged[at + 24], &five, 4);
-    const std::string path = tempPath("header_fixed.exr");
-    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
-    const std::string e = errorOf([&] { readExr(path); });
-    EXPECT_NE(e.find("'compression' of type compression declares 5 bytes but its value takes 1"), std::string::npos) << e;
-  }
-  // A channel list longer than it declares (a mutation that copied channel names past its end).
-  {
-    std::string damaged = bytes;
-    const size_t at = damaged.find(std::string("channels\0chlist\0", 16));
-    ASSERT_NE(at, std::string::npos);
-    uint32_t size = 0;
-    std::memcpy(&size, &damaged[at + 16], 4);
-    size -= 18;  // the last channel (a one-letter name, its terminator and 16 bytes) outside the declared size
-    std::memcpy(&damaged[at + 16], &size, 4);
-    const std::string path = tempPath("header_chlist.exr");
-    std::ofstream(path, std::ios::binary | std::ios::trunc) << damaged;
-    const std::string e = errorOf([&] { readExr(path); });
-    EXPECT_NE(e.find("'channels' of type chlist declares"), std::string::npos) << e;
-  }
+  std::string fixed = bytes;
+  ASSERT_TRUE(setSize(fixed, std::string("compression\0compression\0", 24), [](uint32_t) { return 5u; }));
+  std::string e = readDamaged(fixed, "header_fixed.exr").first;
+  EXPECT_NE(e.find("'compression' of type compression declares 5 bytes but its value takes 1"), std::string::npos) << e;
+  // A channel list longer than it declares (a mutation that copied channel names past its end): the last
+  // channel (a one-letter name, its terminator and 16 bytes) outside the declared size.
+  std::string longer = bytes;
+  ASSERT_TRUE(setSize(longer, channels, [](uint32_t size) { return size - 18; }));
+  e = readDamaged(longer, "header_chlist.exr").first;
+  EXPECT_NE(e.find("'channels' of type chlist declares"), std::string::npos) << e;
   // A real multi-part list that never ends (the bit set on a single-part file whose header is followed by
   // its offset table) is refused with a clear error or read as OpenEXR reads it, never by a huge allocation.
   std::string flipped = bytes;
   flipped[5] = char(uint8_t(flipped[5]) | 0x10);
-  const std::string path = tempPath("header_flipped.exr");
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << flipped;
-  EXPECT_NE(errorOf([&] { readExr(path); }), "");
+  EXPECT_NE(readDamaged(flipped, "header_flipped.exr").first, "");
 }
 
 TEST(Exr, MissingOrBadChannelIsReported) {
