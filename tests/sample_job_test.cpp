@@ -164,9 +164,8 @@ TEST(JobApi, StratifiedPixelPointsCoverEachPixelEvenly) {
   PixelSampling sampling;
   sampling.multiplicity.assign(size_t(kW) * kH, 1);
   for (size_t i = 0; i < sampling.multiplicity.size(); i += 7) sampling.multiplicity[i] = 4;
-  auto worst = [&](bool stratified, bool hashed = false) {
-    sampling.stratified = stratified;
-    sampling.hashed = hashed;
+  auto worst = [&](PixelSampling::Points points) {
+    sampling.points = points;
     PartialResult all;
     for (const WorkUnit& u : plan.units) all.add(runSampleUnit(eval, plan, u, nullptr, &sampling));
     double off = 0;  // relative to half a stratum
@@ -178,14 +177,13 @@ TEST(JobApi, StratifiedPixelPointsCoverEachPixelEvenly) {
     }
     return off;
   };
-  EXPECT_LE(worst(true), 1 + 1e-4);
-  EXPECT_GT(worst(false, true), 3.0);
+  EXPECT_LE(worst(PixelSampling::Points::Hammersley), 1 + 1e-4);
+  EXPECT_GT(worst(PixelSampling::Points::Hashed), 3.0);
   // The default, Sobol points: 16 and 64 samples are (0, m, 2)-nets, so their mean is as close.
-  EXPECT_LE(worst(false), 1 + 1e-4);
+  EXPECT_LE(worst(PixelSampling::Points::Sobol), 1 + 1e-4);
   // Half of the samples: unbiased over the film (300 pixels x 8 samples, more in some, each uniform: the
   // mean of u0 has a standard error of at most 0.29 / sqrt(2400) = 0.006).
-  sampling.stratified = true;
-  sampling.hashed = false;
+  sampling.points = PixelSampling::Points::Hammersley;
   const PartialResult half = runSampleUnit(eval, plan, plan.units.front(), nullptr, &sampling);
   double sum = 0, count = 0;
   for (size_t i = 0; i < half.film.pixelCount(); ++i) {

@@ -87,12 +87,6 @@ ImageMetadata readMetadata(const Imf::Header& header, bool keepInternal) {
   return m;
 }
 
-// OpenEXR allocates each header attribute's value at the size the file declares before reading it, so a
-// damaged or hostile file could make it take gigabytes (seen by the fuzz test under AddressSanitizer: a
-// 1 GB attribute in a 2 KB file). Walks the header (magic, version, then name\0 type\0 int32 size value,
-// up to an empty name; a multi-part file has one such header per part and ends the list with an empty
-// header) and refuses any attribute larger than the rest of the file or 64 MiB, before OpenEXR reads it.
-// Multi-part files used to be left to OpenEXR, and names were allowed 255 bytes whatever the flags.
 // The value sizes of OpenEXR's fixed-size attribute types (ImfStandardAttributes and the Imf*Attribute
 // readers of OpenEXR 3.1).
 const std::map<std::string, uint64_t> kFixedAttributeSizes = {
@@ -101,6 +95,12 @@ const std::map<std::string, uint64_t> kFixedAttributeSizes = {
     {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12}, {"v3d", 24},
     {"deepImageState", 1}, {"chromaticities", 32}};
 
+// OpenEXR allocates each header attribute's value at the size the file declares before reading it, so a
+// damaged or hostile file could make it take gigabytes (seen by the fuzz test under AddressSanitizer: a
+// 1 GB attribute in a 2 KB file). Walks the header (magic, version, then name\0 type\0 int32 size value,
+// up to an empty name; a multi-part file has one such header per part and ends the list with an empty
+// header) and refuses any attribute larger than the rest of the file or 64 MiB, before OpenEXR reads it.
+// Multi-part files used to be left to OpenEXR, and names were allowed 255 bytes whatever the flags.
 void checkHeaderSizes(const std::string& path) {
   constexpr uint64_t kMaxAttribute = 64ull << 20;
   std::ifstream in(path, std::ios::binary);
@@ -152,7 +152,6 @@ void checkHeaderSizes(const std::string& path) {
     if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
       reads = fixed->second;
     } else if (type == "chlist") {  // channels: name\0 and 16 bytes each, up to an empty name
-      reads = 0;
       for (std::string channel = readString("channel name"); !channel.empty(); channel = readString("channel name")) {
         in.seekg(16, std::ios::cur);
         pos += 16;

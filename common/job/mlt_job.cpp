@@ -589,7 +589,7 @@ PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const
   // pixels a small light's footprint marks.
   PixelSampling sampling;
   if (plan.settings.directLight == DirectLight::Emission) {
-    sampling.stratified = true;
+    sampling.points = PixelSampling::Points::Hammersley;
     sampling.multiplicity = smallLightCells(scene, 1);
     const uint8_t outline = uint8_t(directPassMultiplicity(plan.settings));
     for (uint8_t& m : sampling.multiplicity) m = m ? outline : uint8_t(1);

@@ -84,6 +84,7 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
     throw std::invalid_argument("sample unit: pixel multiplicities for " + std::to_string(sampling->multiplicity.size()) +
                                 " pixels on a " + std::to_string(width) + "x" + std::to_string(height) + " film");
   const bool lightTracing = evaluator.splatsOnly();  // lt: every splat goes to the splat sums
+  const PixelSampling::Points points = sampling ? sampling->points : PixelSampling::Points::Sobol;
   PartialResult result;
   result.film = Film(width, height);
   result.units = {unit.index};
@@ -115,10 +116,10 @@ PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan,
             for (uint32_t r = 0; r < m; ++r) {
               const uint64_t i = uint64_t(k) * m + r;  // m = 1: i = k, the sample as it always was
               source.reset(key, i);
-              if (sampling && sampling->stratified)
-                source.setPixelPoint(stratifiedPixelPoint(key, uint32_t(i), uint32_t(s.spp) * m));
-              else if (!lightTracing && !(sampling && sampling->hashed))
+              if (!lightTracing && points == PixelSampling::Points::Sobol)
                 source.setPixelPoint(sobolPixelPoint(key, uint32_t(i)));
+              else if (!lightTracing && points == PixelSampling::Points::Hammersley)
+                source.setPixelPoint(stratifiedPixelPoint(key, uint32_t(i), uint32_t(s.spp) * m));
               const Vec2 pixel{float(x), float(y)};
               contribution.clear();
               evaluator.evaluate(source, &pixel, contribution);

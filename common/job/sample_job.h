@@ -44,23 +44,24 @@ struct TechniqueFilms {
   static int index(int s, int t) { const int L = s + t - 1; return (L - 1) * (L + 2) / 2 + s; }
   static int count(int maxLength) { return index(0, maxLength + 2); }  // first index of length maxLength+1
 };
-// Where a camera sample lies in its pixel. By default (no PixelSampling, or neither flag below) pixel j's
-// sample i lies at sobolPixelPoint(its key, i): any prefix of a pixel's samples covers it evenly, so a time
-// budget's pt and bdpt and the chain methods' direct pass get stratified pixels whatever count they stop
-// at. The pass of the lights seen directly (DirectLight::Emission) knows its count: a light a pixel wide
-// is an outline in every pixel it touches, and a pixel it covers by a sliver is worth ~nothing in the
-// reference but a whole sample's radiance / n where one of n samples hits it.
-//  - stratified: pixel j's sample i of n lies at stratifiedPixelPoint(its key, i, n), the rotated
-//    Hammersley points of a known n. Each point is still uniform on the pixel, so a pixel's mean of any set
-//    of its samples stays unbiased; all n cover it evenly (the variance at an outline falls as ~n^-1.5
-//    instead of n^-1).
-//  - hashed: the camera's own hashed numbers (independent points; what every sample used before the Sobol
+// Where a camera sample lies in its pixel (PixelSampling::points):
+//  - Sobol (the default, also without a PixelSampling): pixel j's sample i lies at sobolPixelPoint(its key,
+//    i). Any prefix of a pixel's samples covers it evenly, so a time budget's pt and bdpt and the chain
+//    methods' direct pass get stratified pixels whatever count they stop at.
+//  - Hammersley: pixel j's sample i of n lies at stratifiedPixelPoint(its key, i, n), the rotated
+//    Hammersley points of a known n: the pass of the lights seen directly (DirectLight::Emission), where a
+//    light a pixel wide is an outline in every pixel it touches, and a pixel it covers by a sliver is worth
+//    ~nothing in the reference but a whole sample's radiance / n where one of n samples hits it.
+//  - Hashed: the camera's own hashed numbers (independent points; what every sample used before the Sobol
 //    points; kept for tests that compare with it).
+// Each point is uniform on the pixel, so a pixel's mean of any set of its samples stays unbiased; the
+// stratified ones cover it evenly (the variance at an outline falls as ~n^-1.5 instead of n^-1). Light
+// tracing (lt) takes no camera sample and ignores this.
 //  - multiplicity (per pixel, row-major; empty: 1 everywhere): m_j samples per sample index k, numbered
 //    i = k m_j + r (r < m_j) of n = spp m_j; the pixel's mean is its sum over its count, as always.
 struct PixelSampling {
-  bool stratified = false;
-  bool hashed = false;
+  enum class Points { Sobol, Hammersley, Hashed };
+  Points points = Points::Sobol;
   std::vector<uint8_t> multiplicity;
 };
 PartialResult runSampleUnit(const PathEvaluator& evaluator, const JobPlan& plan, const WorkUnit& unit,
