@@ -281,6 +281,7 @@ v1::JobPlan toProto(const JobPlan& plan) {
   };
   for (const BootstrapEstimate& e : plan.norm.bootstrapB) estimate(e, n->add_bootstrap_b());
   for (const BootstrapEstimate& e : plan.norm.bootstrapLuminance) estimate(e, n->add_bootstrap_luminance());
+  if (plan.norm.targetPower != 1) n->set_target_power(plan.norm.targetPower);
   for (const WorkUnit& u : plan.units) {
     auto* w = p.add_units();
     w->set_index(u.index);
@@ -345,8 +346,13 @@ JobPlan fromProto(const v1::JobPlan& p) {
   for (const auto& e : n.bootstrap_b()) plan.norm.bootstrapB.push_back(estimate(e, "plan.norm.bootstrap_b"));
   for (const auto& e : n.bootstrap_luminance())
     plan.norm.bootstrapLuminance.push_back(estimate(e, "plan.norm.bootstrap_luminance"));
-  if (!plan.norm.bootstrapLuminance.empty() && plan.norm.importance.empty())
-    throw WireError("plan.norm.bootstrap_luminance", "a luminance estimate without an importance map");
+  if (n.has_target_power()) {
+    if (!(n.target_power() > 0 && n.target_power() <= 1))
+      throw WireError("plan.norm.target_power", fmt::format("invalid value {} (a power in (0, 1])", n.target_power()));
+    plan.norm.targetPower = n.target_power();
+  }
+  if (!plan.norm.bootstrapLuminance.empty() && !plan.norm.target().shaped())
+    throw WireError("plan.norm.bootstrap_luminance", "a luminance estimate without an importance map or a target power");
   if (p.total_units() != 0 && p.total_units() != uint32_t(p.units_size()))  // a page, not a whole plan
     throw WireError("plan.total_units", fmt::format("{} units in a plan of {}: a page (proto/plan_pages.h)",
                                                     p.units_size(), p.total_units()));

@@ -218,5 +218,20 @@ TEST(FarmChainMethods, MmltWithTheRelativeTargetOnTwoWorkersMatchesTheInProcessR
   EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
 }
 
+// A tempered target (common/mlt/target.h (T1)): the power travels with the plan, and the farm's image is the
+// in-process one, bit for bit, scaled to b_lum (develop.h (D8)) from the workers' luminance sums.
+TEST(FarmChainMethods, MmltWithATemperedTargetOnTwoWorkersMatchesTheInProcessRender) {
+  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
+                                    "--method mmlt --target-power 0.7 --seed 7 --width 32 --height 32 "
+                                    "--mutations-per-pixel 8 --chains 24 --bootstrap 4000",
+                                    "mmlt-tempered");
+  expectSameImageAndStatistics(r, "mmlt");
+  EXPECT_EQ(text(r.farm, "target"), "luminance");
+  EXPECT_EQ(number(r.farm, "targetPower"), 0.7);
+  EXPECT_TRUE(r.local.plan.norm.importance.empty());
+  EXPECT_EQ(r.local.plan.norm.targetPower, 0.7);
+  EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
+}
+
 }  // namespace
 }  // namespace mlt::farm::test

@@ -302,5 +302,38 @@ TEST(FarmLayer, TheImportanceMapTravelsWithThePlanAndABadOneIsRefused) {
   }
 }
 
+// A tempered target's power (common/mlt/target.h (T1)) travels with the plan (absent: 1), and with it b_lum's
+// estimates without a map; a power outside (0, 1] is refused, naming the field.
+TEST(FarmLayer, TheTargetPowerTravelsWithThePlanAndABadOneIsRefused) {
+  JobPlan plan = chainPlan(8, 6, 4, 16);
+  EXPECT_FALSE(wire::toProto(plan).norm().has_target_power());  // 1: nothing sent
+  EXPECT_EQ(wire::parseJobPlan(wire::jobPlanBytes(plan)).norm.targetPower, 1.0);
+  plan.norm.targetPower = 0.65;
+  plan.norm.bootstrapLuminance.assign(2, BootstrapEstimate{});
+  plan.norm.bootstrapLuminance[1] = {4096, 0.25, 0.001, 0.3, 2.5, 0.24, 0.001, 0.2, 0.01};
+  const JobPlan back = wire::parseJobPlan(wire::jobPlanBytes(plan));
+  EXPECT_EQ(back.norm.targetPower, 0.65);
+  EXPECT_TRUE(back.norm.importance.empty());
+  EXPECT_EQ(back.norm.bootstrapLuminance, plan.norm.bootstrapLuminance);
+  for (const double bad : {0.0, -0.5, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    v1::JobPlan p = wire::toProto(plan);
+    p.mutable_norm()->set_target_power(bad);
+    try {
+      wire::fromProto(p);
+      ADD_FAILURE() << bad << ": accepted";
+    } catch (const wire::WireError& e) {
+      EXPECT_EQ(e.field(), "plan.norm.target_power") << bad;
+    }
+  }
+  v1::JobPlan plain = wire::toProto(plan);
+  plain.mutable_norm()->clear_target_power();  // power 1 and no map: b_lum's estimates do not belong
+  try {
+    wire::fromProto(plain);
+    ADD_FAILURE() << "a luminance estimate without a map or a power was accepted";
+  } catch (const wire::WireError& e) {
+    EXPECT_EQ(e.field(), "plan.norm.bootstrap_luminance");
+  }
+}
+
 }  // namespace
 }  // namespace mlt::farm

@@ -1,7 +1,8 @@
 // The Markov chain methods agree with bdpt on the bundled scenes themselves (scenes/*.xml through the
-// Mitsuba front end), at a small resolution, with their default target (luminance) and twice with the
+// Mitsuba front end), at a small resolution, with their default target (luminance), twice with the
 // relative one (common/mlt/importance.h; without develop.h (D8) its image mean varied 30% from run to run
-// here, and the "too weak" check below failed): image mean and 3x3 tile means of R independent job seeds
+// here, and the "too weak" check below failed) and twice with a tempered one (common/mlt/target.h (T1),
+// c = luminance^0.6): image mean and 3x3 tile means of R independent job seeds
 // (bootstrap included) against a long bdpt estimate, within kZ combined standard errors.
 // With t(R - 1 = 11 dof) tails, P(|t| > 5) ~ 4e-4 per entry, ~2% over the ~60 entries here (fixed seeds).
 #include <gtest/gtest.h>
@@ -31,10 +32,13 @@ struct Case {
   double power;  // relative image-mean error the comparison must resolve
   const char* target = kDefaultTarget;  // the chains' target (method parameter "target")
   int chains = 16;
+  const char* targetPower = kDefaultTargetPower;  // method parameter "target-power"
 };
 
 // Readable test names in ctest (instead of the bytes of the struct).
-void PrintTo(const Case& c, std::ostream* os) { *os << c.scene << " " << c.method.c_str() << " " << c.target; }
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.scene << " " << c.method.c_str() << " " << c.target << " power " << c.targetPower;
+}
 
 class MltBundled : public ::testing::TestWithParam<Case> {};
 
@@ -53,6 +57,7 @@ TEST_P(MltBundled, AgreesWithBdpt) {
   s.bootstrapSamples = 40000;
   s.chains = c.chains;
   s.params["target"] = c.target;
+  s.params["target-power"] = c.targetPower;
   const test::ImageStats mlt = test::markovChainStats(*scene, s, kRes, kRes, kRuns, kTiles);
 
   const auto bdpt = makeEvaluator(*scene, "bdpt", s.integrator);
@@ -74,13 +79,17 @@ INSTANTIATE_TEST_SUITE_P(Scenes, MltBundled,
                                            Case{"caustic-mirror.xml", "pssmlt", 32, 0.10},
                                            Case{"door-ajar.xml", "mmlt", 32, 0.10},
                                            Case{"cornell-box.xml", "mmlt", 32, 0.08, "relative"},
-                                           Case{"door-ajar.xml", "mmlt", 32, 0.10, "relative"}),
+                                           Case{"door-ajar.xml", "mmlt", 32, 0.10, "relative"},
+                                           Case{"cornell-box.xml", "pssmlt", 32, 0.08, kDefaultTarget, 16, "0.6"},
+                                           Case{"cornell-box.xml", "mmlt", 32, 0.08, kDefaultTarget, 16, "0.6"}),
                          [](const ::testing::TestParamInfo<Case>& info) {
                            std::string n = std::string(info.param.scene) + "_" + info.param.method.c_str();
                            n = n.substr(0, n.find('.')) + "_" + info.param.method.c_str();
                            if (std::string(info.param.target) != kDefaultTarget) n += std::string("_") + info.param.target;
+                           if (std::string(info.param.targetPower) != kDefaultTargetPower)
+                             n += std::string("_power") + info.param.targetPower;
                            for (char& ch : n)
-                             if (ch == '-') ch = '_';
+                             if (ch == '-' || ch == '.') ch = '_';
                            return n;
                          });
 

@@ -138,6 +138,31 @@ TEST(EmissionEstimate, EstimatesWhatTheChainsTargetOfLengthOneIntegratesTo) {
   EXPECT_LT(c1.stdErr / c1.mean, 0.01) << "the check must be able to fail";
 }
 
+// (T1): with a tempered target the rays estimate what c_1 = luminance(L_e)^beta integrates to, and their
+// luminance summary (b_lum's, develop.h (D8)) is the plain estimate, bit for bit.
+TEST(EmissionEstimate, EstimatesATemperedTargetOfLengthOne) {
+  const ChainJobSpec* mmlt = findChainJobSpec("mmlt");
+  ASSERT_TRUE(mmlt);
+  const RenderSettings s = settings("mmlt", 1);
+  const TargetShape tempered{nullptr, 0.5};
+  const std::unique_ptr<PssTarget> target = mmlt->makeTarget(cornell(), s);
+  PathContribution path;
+  const Mean c1 = iidMean(2000000, [&](uint64_t i) {
+    IndependentSource source(77, i);
+    target->evaluate(source, 1, path);
+    return targetFunction(path, tempered);
+  });
+  const EmissionEstimate e = emissionEstimate(cornell(), s, tempered);
+  const EmissionEstimate plain = emissionEstimate(cornell(), s);
+  ASSERT_GT(e.estimate.b, 0);
+  const double tol = 4 * std::hypot(c1.stdErr, e.estimate.stdErr);
+  EXPECT_NEAR(e.estimate.b, c1.mean, tol) << "c_1's mean " << c1.mean << " +- " << c1.stdErr;
+  EXPECT_GT(std::fabs(plain.estimate.b - c1.mean), 10 * tol) << "the check must tell the two targets apart";
+  EXPECT_EQ(e.luminance.b, plain.estimate.b);
+  EXPECT_EQ(e.luminance.stdErr, plain.estimate.stdErr);
+  EXPECT_EQ(plain.luminance.n, 0u);  // no summary of its own without a shaped target
+}
+
 TEST(EmissionEstimate, UnbiasedWithTheStatedStandardError) {
   const Mean reference = plainEmission(2000000, 5);
   constexpr int kSeeds = 40;
@@ -179,8 +204,8 @@ TEST(EmissionEstimate, SpendsItsRaysOnTheLightsOutline) {
 
 TEST(EmissionEstimate, SameSeedSameBitsForAnyThreadCount) {
   const RenderSettings s = settings("mmlt", 4);
-  const EmissionEstimate a = emissionEstimate(cornell(), s, nullptr, true);
-  const EmissionEstimate b = emissionEstimate(cornell(), s, nullptr, false);
+  const EmissionEstimate a = emissionEstimate(cornell(), s, {}, true);
+  const EmissionEstimate b = emissionEstimate(cornell(), s, {}, false);
   EXPECT_EQ(std::memcmp(&a.estimate.b, &b.estimate.b, sizeof(double)), 0);
   EXPECT_EQ(std::memcmp(&a.estimate.stdErr, &b.estimate.stdErr, sizeof(double)), 0);
   EXPECT_EQ(a.rays, b.rays);

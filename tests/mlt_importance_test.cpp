@@ -8,7 +8,11 @@
 //    included) agrees with a bdpt estimate of (1/P) sum_j h_j luminance(I_j) within their errors;
 //  - the pilot is a pure function of (scene, seed, film, integrator, floor): threads and repetition
 //    give the same bits, another seed another map;
-//  - the methods take "target" (luminance by default) and "target-floor", and the luminance target has no map.
+//  - the methods take "target" (luminance by default), "target-floor" and "target-power", and the luminance
+//    target has no map;
+//  - a tempered target (common/mlt/target.h (T1)): c = (sum of luminance times h)^beta, a chain ends in pixel
+//    j with probability f_j^beta / sum (chi-square, told apart from f_j), and each slot's image still holds
+//    P b_lum (D8).
 // The image stays unbiased with the map: MltBundled.AgreesWithBdpt (mlt_bundled_test.cpp) has a case with
 // the relative target.
 #include <gtest/gtest.h>
@@ -131,6 +135,25 @@ TEST(ImportanceTarget, WeightsEachSplatByItsTile) {
   EXPECT_EQ(targetFunction(p, &m), 0.0);
 }
 
+TEST(TemperedTarget, RaisesTheWeightedSumToItsPower) {
+  const ImportanceMap m = rowMap({0.5f, 2.0f, 4.0f});
+  PathContribution p;
+  p.splats.push_back({Vec2(0.2f, 0.5f), Color(1.0f)});
+  p.splats.push_back({Vec2(2.7f, 0.5f), Color(0.25f, 0.5f, 1.0f)});
+  const double lum = targetFunction(p), weighted = targetFunction(p, &m);
+  EXPECT_NEAR(targetFunction(p, TargetShape{nullptr, 0.5}), std::sqrt(lum), 1e-12);
+  EXPECT_NEAR(targetFunction(p, TargetShape{&m, 0.7}), std::pow(weighted, 0.7), 1e-12);
+  EXPECT_EQ(targetFunction(p, TargetShape{&m, 1}), weighted);  // power 1: the same bits
+  EXPECT_EQ(targetFunction(p, TargetShape{}), lum);
+  EXPECT_FALSE(TargetShape{}.shaped());
+  EXPECT_TRUE((TargetShape{nullptr, 0.5}.shaped()));
+  EXPECT_TRUE((TargetShape{&m, 1}.shaped()));
+  const ImportanceMap none;
+  EXPECT_FALSE((TargetShape{&none, 1}.shaped()));
+  p.splats[0].L = Color(-100.0f);
+  EXPECT_EQ(targetFunction(p, TargetShape{nullptr, 0.5}), 0.0);
+}
+
 // ---- a chain samples c = f h ----------------------------------------------------------------------
 constexpr uint64_t kSeed = 20261206;
 const double kF[4] = {10, 1, 3, 0.5};        // f per pixel of a 4 x 1 film
@@ -155,14 +178,14 @@ class NullSink final : public ChainSink {
 };
 
 // Final pixels of `chains` independent chains of `mutations` steps, each from a uniform start.
-std::vector<int> finalPixels(const ImportanceMap* map, int chains, uint64_t mutations) {
+std::vector<int> finalPixels(const TargetShape& shape, int chains, uint64_t mutations) {
   KelemenParams params;
   params.largeStepProb = 0.3f;
   std::vector<int> pixels;
   PathContribution current, scratch;
   NullSink sink;
   ChainConfig config;
-  config.importance = map;
+  config.target = shape;
   for (int j = 0; j < chains; ++j) {
     KelemenSource source(params, kSeed, uint64_t(j), uint64_t(j));
     PixelTarget target(source);
@@ -171,7 +194,7 @@ std::vector<int> finalPixels(const ImportanceMap* map, int chains, uint64_t muta
     source.accept();
     PssState state(source);
     Pcg32 acceptRng = chainRng(kSeed, uint64_t(j), 1);
-    runChain(state, target, config, sink, acceptRng, mutations, current, targetFunction(current, map), scratch);
+    runChain(state, target, config, sink, acceptRng, mutations, current, targetFunction(current, shape), scratch);
     pixels.push_back(std::min(3, int(current.splats[0].pRaster.x)));
   }
   return pixels;
@@ -197,8 +220,8 @@ TEST(ImportanceTarget, AChainVisitsPixelsInProportionToFTimesH) {
     f[i] = kF[i] * double(luminance(Color(1.0f)));
     fh[i] = f[i] * double(kH[i]);
   }
-  const std::vector<int> relative = finalPixels(&map, 4000, 64);
-  const std::vector<int> plain = finalPixels(nullptr, 4000, 64);
+  const std::vector<int> relative = finalPixels(TargetShape{&map}, 4000, 64);
+  const std::vector<int> plain = finalPixels(TargetShape{}, 4000, 64);
   const double pRelative = pValue(relative, fh), pPlain = pValue(plain, f);
   std::printf("with the map: p = %.3g against f h (%.3g against f); without: p = %.3g against f\n", pRelative,
               pValue(relative, f), pPlain);
@@ -206,6 +229,20 @@ TEST(ImportanceTarget, AChainVisitsPixelsInProportionToFTimesH) {
   EXPECT_GT(pPlain, 1e-3);
   EXPECT_LT(pValue(relative, f), 1e-9);  // the test tells the two apart
   EXPECT_LT(pValue(plain, fh), 1e-9);
+}
+
+TEST(TemperedTarget, AChainVisitsPixelsInProportionToFToTheBeta) {
+  constexpr double kBeta = 0.5;
+  double fb[4], f[4];
+  for (int i = 0; i < 4; ++i) {
+    f[i] = kF[i] * double(luminance(Color(1.0f)));
+    fb[i] = std::pow(f[i], kBeta);
+  }
+  const std::vector<int> tempered = finalPixels(TargetShape{nullptr, kBeta}, 4000, 64);
+  const double p = pValue(tempered, fb);
+  std::printf("tempered (beta %.1f): p = %.3g against f^beta (%.3g against f)\n", kBeta, p, pValue(tempered, f));
+  EXPECT_GT(p, 1e-3);
+  EXPECT_LT(pValue(tempered, f), 1e-9);  // the test tells f^beta from f
 }
 
 // ---- b of the relative target ---------------------------------------------------------------------
@@ -259,16 +296,25 @@ TEST_P(RelativeB, TheBootstrapsBIsTheHWeightedImageMean) {
 INSTANTIATE_TEST_SUITE_P(Methods, RelativeB, ::testing::Values("pssmlt", "mmlt"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return std::string(info.param); });
 
-// (D8): with a relative target each slot's developed image holds P b_lum^ of luminance, b_lum^ pooled from
-// the bootstrap's luminance and the large steps' (refinedLuminanceB), whatever the chains' spread; and the
-// farm's partials carry the large steps' luminance sums.
-TEST(RelativeDevelop, EachSlotsImageHoldsBLuminance) {
+// (D8): with a relative or a tempered target each slot's developed image holds P b_lum^ of luminance,
+// b_lum^ pooled from the bootstrap's luminance and the large steps' (refinedLuminanceB), whatever the chains'
+// spread; and the farm's partials carry the large steps' luminance sums.
+TEST(ShapedDevelop, EachSlotsImageHoldsBLuminance) {
+  struct Shape {
+    const char* target;
+    const char* power;
+  };
+  for (const Shape shape : {Shape{"relative", "1"}, Shape{"luminance", "0.6"}})
   for (const char* method : {"pssmlt", "mmlt"}) {
     RenderSettings s = chainSettings(method, 3);
+    s.params["target"] = shape.target;
+    s.params["target-power"] = shape.power;
     s.mutationsPerPixel = 16;
     s.bootstrapSamples = 4096;
     const JobPlan plan = planJob(cornell(), s);
-    ASSERT_FALSE(plan.norm.importance.empty());
+    ASSERT_TRUE(plan.norm.target().shaped()) << shape.target;
+    EXPECT_EQ(plan.norm.importance.empty(), std::string(shape.target) == "luminance");
+    EXPECT_EQ(plan.norm.targetPower, std::stod(shape.power));
     ASSERT_EQ(plan.norm.bootstrapLuminance.size(), plan.norm.mutationsPerLength.size());
     PartialResult merged;
     for (const WorkUnit& u : plan.units) merged.add(runWorkUnit(cornell(), plan, u));
@@ -308,7 +354,7 @@ TEST(ImportancePilot, IsAPureFunctionOfItsInputs) {
   EXPECT_NE(importancePilot(cornell(), s, 2.0).map, a.map);
 }
 
-TEST(ImportancePilot, TheMethodsTakeTheTargetAndItsFloor) {
+TEST(ImportancePilot, TheMethodsTakeTheTargetItsFloorAndItsPower) {
   for (const char* name : {"pssmlt", "pssmlt-bdpt", "mmlt", "rjmlt"}) {
     const ChainJobSpec* spec = findChainJobSpec(name);
     ASSERT_NE(spec, nullptr) << name;
@@ -324,8 +370,31 @@ TEST(ImportancePilot, TheMethodsTakeTheTargetAndItsFloor) {
     EXPECT_FALSE(bootstrapMarkovChainJob(cornell(), s).importance) << name;  // no pilot, no map
     s.params["target"] = "brightness";
     EXPECT_THROW(findMethod(name).validate(s), std::invalid_argument) << name;
+    s.params["target"] = "luminance";
+    EXPECT_EQ(spec->targetPower(s), 1.0) << name;  // the default
+    s.params["target-power"] = "0.7";
+    EXPECT_EQ(spec->targetPower(s), 0.7) << name;
+    EXPECT_NO_THROW(findMethod(name).validate(s)) << name;
+    for (const char* bad : {"0", "0.01", "1.5", "-1", "nan"}) {
+      s.params["target-power"] = bad;
+      EXPECT_THROW(findMethod(name).validate(s), std::invalid_argument) << name << " " << bad;
+    }
   }
   EXPECT_EQ(findChainJobSpec("veach-mlt")->importanceFloor(chainSettings("veach-mlt", 1)), 0.0);
+  EXPECT_EQ(findChainJobSpec("veach-mlt")->targetPower(chainSettings("veach-mlt", 1)), 1.0);
+  // A plan takes a bootstrap of its own target only: c differs with the power.
+  RenderSettings s = chainSettings("mmlt", 2);
+  s.params["target"] = "luminance";
+  s.params["target-power"] = "0.7";
+  const MarkovChainBootstrap boot = bootstrapMarkovChainJob(cornell(), s);
+  EXPECT_NO_THROW(planMarkovChainJob(cornell(), s, boot));
+  s.params["target-power"] = "1";
+  try {
+    planMarkovChainJob(cornell(), s, boot);
+    ADD_FAILURE() << "a bootstrap of another power was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the target's power"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -102,7 +102,7 @@ std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* 
   return marked;
 }
 
-EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, const ImportanceMap* importance,
+EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& s, const TargetShape& target,
                                   bool parallel) {
   const int W = scene.camera().width(), H = scene.camera().height();  // the film
   if (W <= 0 || H <= 0) throw std::invalid_argument("emission estimate: empty film");
@@ -179,7 +179,8 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
   // 2. Fresh stratified rays per cell; per-row sums of I_j^ and of its variance estimate, reduced in row order.
   std::vector<double> rowMean(size_t(Y), 0.0), rowVar(size_t(Y), 0.0);
   std::vector<double> rowLum(size_t(Y), 0.0), rowLumVar(size_t(Y), 0.0);  // unweighted (a map only)
-  const bool weighted = importance && !importance->empty();
+  const bool weighted = target.hasMap(), shaped = target.shaped();
+  const double beta = target.power;  // (T1): each ray's c = (h L_e)^beta = h^beta L_e^beta
   forRows(Y, parallel, [&](int y) {
     IndependentSource source(0, 0);
     PathContribution path;
@@ -187,22 +188,27 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
     for (int x = 0; x < X; ++x) {
       const uint64_t j = uint64_t(y) * uint64_t(X) + uint64_t(x);
       const uint32_t half = (edge[j] ? edgeRays : kEmissionFlatRays) / 2;
-      double m[2];
+      double m[2], mc[2];  // per replicate: the mean luminance, and the mean L_e^beta (= m where beta = 1)
       for (uint64_t r = 0; r < 2; ++r) {  // two independent replicates of `half` stratified rays
         const uint64_t key = hashKeys(s.seed, kStageKey, j, r);
-        double sum = 0;
+        double sum = 0, sumC = 0;
         for (uint32_t k = 0; k < half; ++k) {
           source.reset(key, k);
-          sum += seen(source, path, x, y, stratifiedPixelPoint(key, k, half));
+          const double v = seen(source, path, x, y, stratifiedPixelPoint(key, k, half));
+          sum += v;
+          if (beta != 1) sumC += std::pow(v, beta);
         }
         m[r] = sum / double(half);
+        mc[r] = beta != 1 ? sumC / double(half) : m[r];
       }
-      const double h = weighted ? double(importance->at(Vec2{float(x / G) + 0.5f, float(y / G) + 0.5f})) : 1.0;
-      const double mean = 0.5 * (m[0] + m[1]), var = 0.25 * (m[0] - m[1]) * (m[0] - m[1]);  // E[(m_0 - m_1)^2] / 4
+      double h = weighted ? double(target.importance->at(Vec2{float(x / G) + 0.5f, float(y / G) + 0.5f})) : 1.0;
+      if (beta != 1) h = std::pow(h, beta);
+      const double mean = 0.5 * (mc[0] + mc[1]), var = 0.25 * (mc[0] - mc[1]) * (mc[0] - mc[1]);  // E[(m_0 - m_1)^2] / 4
+      const double lum = 0.5 * (m[0] + m[1]), lumVar = 0.25 * (m[0] - m[1]) * (m[0] - m[1]);
       sumMean += h * mean;
       sumVar += h * h * var;
-      sumLum += mean;
-      sumLumVar += var;
+      sumLum += lum;
+      sumLumVar += lumVar;
     }
     rowMean[size_t(y)] = sumMean;
     rowVar[size_t(y)] = sumVar;
@@ -230,7 +236,7 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
   e.bulkStdErr = e.stdErr;
   e.bulkVar = 0;
   e.excessMeanSq = 0;
-  if (weighted) {  // the same summary of the unweighted sums
+  if (shaped) {  // the same summary of the luminance sums
     BootstrapEstimate& l = out.luminance;
     l = e;
     l.b = l.bulkB = totalLum / double(C);

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "common/mlt/importance.h"
+#include "common/mlt/target.h"
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
 
@@ -79,8 +80,8 @@ constexpr double kEmissionRayCost = 3;
 struct EmissionEstimate {
   bool estimated = false;   // false: the pilot alone ran (no emission seen, or kEmissionMaxCellShare reached)
   BootstrapEstimate estimate;
-  // With an importance map: `estimate` is of the weighted target, this of b_1's luminance (unweighted), from
-  // the same rays (n = 0 without a map).
+  // With a shaped target (a map or a power): `estimate` is of that target, this of b_1's luminance, from the
+  // same rays (n = 0 otherwise).
   BootstrapEstimate luminance;
   uint64_t rays = 0;            // pilot + stage 2
   int cellsPerPixelAxis = 1;    // G
@@ -106,10 +107,10 @@ std::vector<uint8_t> smallLightCells(const RenderScene& scene, int G, uint64_t* 
 // large steps of length 1 are summed whole too). Its sampleVar and bulkVar are left 0 for the caller: the
 // variance of c_1 per uniform sample (the candidates', which run after this pilot decided whether they
 // only seed chains) is what a large step of length 1 has and what combineB weighs the large steps by.
-// importance (optional, the relative target's map, common/mlt/importance.h): b_1 of that target,
-// (1/P) sum_j h_j I_j, each cell's estimate weighted by its pixel's h (the pilot's decisions read the
-// unweighted rays).
+// target (optional): b_1 of the chains' target (common/mlt/target.h): with the relative target's map
+// (1/P) sum_j h_j I_j, each cell's estimate weighted by its pixel's h; with a power beta each ray's
+// (h L_e)^beta (T1). The pilot's decisions read the rays' luminance.
 EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings& settings,
-                                  const ImportanceMap* importance = nullptr, bool parallel = true);
+                                  const TargetShape& target = {}, bool parallel = true);
 
 }  // namespace mlt

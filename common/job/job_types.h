@@ -17,6 +17,7 @@
 #include "common/film/sparse_splats.h"
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/importance.h"
+#include "common/mlt/target.h"
 #include "common/mlt/target_sums.h"
 #include "common/settings/render_settings.h"
 
@@ -52,9 +53,13 @@ struct Normalization {
   // The relative target's importance map (common/mlt/importance.h (R2)), which every chain's target reads;
   // empty: the target is the path's luminance.
   ImportanceMap importance;
-  // With a map: the bootstrap's estimate of b_lum per slot, the mean luminance of a uniform sample (its
-  // candidates' luminance; b_1's camera rays unweighted), to which the development scales each slot's image
-  // (mlt/develop.h (D8)). Empty without a map.
+  // The tempered target's power beta (common/mlt/target.h (T1)); 1: c is linear in the path's light.
+  double targetPower = 1;
+  // The chains' target shape: the map above (if any) and the power.
+  TargetShape target() const { return TargetShape{importance.empty() ? nullptr : &importance, targetPower}; }
+  // With a shaped target (a map, or a power other than 1): the bootstrap's estimate of b_lum per slot, the
+  // mean luminance of a uniform sample (its candidates' luminance; b_1's camera rays unweighted), to which
+  // the development scales each slot's image (mlt/develop.h (D8)). Empty otherwise.
   std::vector<BootstrapEstimate> bootstrapLuminance;
   double luminanceTailThreshold(size_t slot) const {
     return slot < bootstrapLuminance.size() ? bootstrapLuminance[slot].tau : std::numeric_limits<double>::infinity();

@@ -179,6 +179,7 @@ void checkBootstrapFits(const ChainJobSpec& spec, const RenderSettings& b, const
   if (b.directLight != s.directLight) differs("directLight", directLightName(b.directLight), directLightName(s.directLight));
   if (spec.importanceFloor(b) != spec.importanceFloor(s))
     differs("the relative target's floor", spec.importanceFloor(b), spec.importanceFloor(s));
+  if (spec.targetPower(b) != spec.targetPower(s)) differs("the target's power", spec.targetPower(b), spec.targetPower(s));
   if (bootstrapPerLength(spec, b) != bootstrapPerLength(spec, s))
     differs("bootstrap samples per length", bootstrapPerLength(spec, b), bootstrapPerLength(spec, s));
 }
@@ -234,9 +235,12 @@ bool sameRaysInputs(const RenderSettings& e, const RenderSettings& s) {
 bool importanceReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s, double floor) {
   return earlier && earlier->importance && sameRaysInputs(earlier->settings, s) && earlier->importance->floor == floor;
 }
-bool emissionReusable(const MarkovChainBootstrap* earlier, const RenderSettings& s, double floor) {
+// b_1's rays compute c of the target: its map and its power (target.h (T1)).
+bool emissionReusable(const ChainJobSpec& spec, const MarkovChainBootstrap* earlier, const RenderSettings& s,
+                      double floor) {
   const bool sameMap = floor > 0 ? importanceReusable(earlier, s, floor) : !(earlier && earlier->importance);
-  return earlier && earlier->emission && sameRaysInputs(earlier->settings, s) && sameMap;
+  return earlier && earlier->emission && sameRaysInputs(earlier->settings, s) && sameMap &&
+         spec.targetPower(earlier->settings) == spec.targetPower(s);
 }
 }  // namespace
 
@@ -324,10 +328,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
                                              : std::string("an earlier bootstrap's, not traced again"));
   }
   const ImportanceMap* importance = out.importance && !out.importance->map.empty() ? &out.importance->map : nullptr;
+  const TargetShape shape{importance, spec.targetPower(s)};
+  if (shape.power != 1) spdlog::info("{}: tempered target, c = luminance^{:g} (target.h (T1))", spec.name(), shape.power);
   BootstrapConfig bc;
   bc.candidatesPerLength = uint64_t(out.settings.bootstrapSamples);
   bc.pathLengths = lengths;
-  bc.luminance = importance != nullptr;  // b_lum (develop.h (D8))
+  bc.luminance = shape.shaped();  // b_lum (develop.h (D8))
   if (bc.candidatesPerLength >= 4 * kCandidateGroups * 2) {
     // A budget of the cost of N mutations per length (bootstrap.h, chainMixCost: a candidate of a long
     // path costs more than one of a short path, and the chains dwell on bright paths, often short). A
@@ -340,14 +346,14 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   const uint64_t seed = s.seed;
   const int width = s.width, height = s.height;
   const BinnedCandidateFnFactory candidates = [&spec, &scene, &s, seed, width, height,
-                                                importance]() -> BinnedCandidateFn {
+                                                shape]() -> BinnedCandidateFn {
     std::shared_ptr<PssTarget> target = spec.makeTarget(scene, s);
     auto path = std::make_shared<PathContribution>();
-    return [target, path, seed, width, height, importance](uint64_t index, int k, CandidateInfo* info) {
+    return [target, path, seed, width, height, shape](uint64_t index, int k, CandidateInfo* info) {
       IndependentSource source = IndependentSource::candidate(seed, index);  // film positions spread evenly
       target->evaluate(source, k, *path);
-      const double c = targetFunction(*path, importance);
-      if (importance) info->luminance = targetFunction(*path);  // b_lum (develop.h (D8))
+      const double c = targetFunction(*path, shape);
+      if (shape.shaped()) info->luminance = targetFunction(*path);  // b_lum (develop.h (D8))
       // mmlt: one splat per path; its allocation bin (pssmlt's single length needs none).
       if (c > 0 && !path->splats.empty()) info->bin = allocationBin(path->splats[0].pRaster, width, height);
       info->work = source.reads();
@@ -360,12 +366,12 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   const bool lengthOne = spec.chainsPerLength() && lengths.front() == 1;
   std::optional<EmissionEstimate> e1;
   double raySeconds = 0;
-  const bool reused = lengthOne && emissionReusable(earlier, s, floor);
+  const bool reused = lengthOne && emissionReusable(spec, earlier, s, floor);
   if (reused) {
     e1 = earlier->emission;  // the same rays' result: not traced again (raySeconds stays 0)
   } else if (lengthOne) {
     const auto t0 = std::chrono::steady_clock::now();
-    e1 = emissionEstimate(scene, s, importance);
+    e1 = emissionEstimate(scene, s, shape);
     raySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   out.emission = e1;
@@ -412,7 +418,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
     if (raysForLengthOne) {
       final = e1->estimate;
       final.sampleVar = final.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
-      if (importance) {  // b_lum of length 1 from the same rays, unweighted
+      if (shape.shaped()) {  // b_lum of length 1 from the same rays, unweighted
         const double var = l1.luminanceEstimate.sampleVar;
         l1.luminanceEstimate = e1->luminance;
         l1.luminanceEstimate.sampleVar = l1.luminanceEstimate.bulkVar = var;
@@ -513,6 +519,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   }
   norm.totalMutations = boot.b > 0 ? M : 0;
   if (bootstrap.importance) norm.importance = bootstrap.importance->map;
+  norm.targetPower = spec.targetPower(s);
 
   // ---- chain allocation: mutations M_k and chains C_k by mutationWeights (common/mlt/allocation.h; the plain rule,
   // proportional to b_k, for one length), largest remainder ----
@@ -529,7 +536,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     norm.mutationsPerLength.assign(1, 0);
   }
   norm.bootstrapB.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
-  if (!norm.importance.empty()) norm.bootstrapLuminance.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
+  if (norm.target().shaped()) norm.bootstrapLuminance.assign(norm.mutationsPerLength.size(), BootstrapEstimate{});
   uint32_t index = 0;
   for (size_t l = 0; l < boot.lengths.size(); ++l) {
     const LengthBootstrap& lb = boot.lengths[l];
@@ -540,7 +547,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
     }
     norm.mutationsPerLength[slot] = Mk[l];
     norm.bootstrapB[slot] = lb.estimate;
-    if (!norm.importance.empty()) norm.bootstrapLuminance[slot] = lb.luminanceEstimate;
+    if (norm.target().shaped()) norm.bootstrapLuminance[slot] = lb.luminanceEstimate;
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {
@@ -624,8 +631,8 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   // Replay the start candidate (iteration 0 of the source reads IndependentSource(seed, candidate)).
   PathContribution current, scratch;
   target->evaluate(source, k, current);
-  const ImportanceMap* importance = norm.importance.empty() ? nullptr : &norm.importance;
-  const double c0 = targetFunction(current, importance);
+  const TargetShape shape = norm.target();
+  const double c0 = targetFunction(current, shape);
   if (!(std::fabs(c0 - unit.startContribution) <= kReplayTolerance * std::fabs(unit.startContribution)) || !(c0 > 0))
     throw std::runtime_error(fmt::format(
         "chain replay mismatch: job seed {}, chain {}, candidate {}, path length {}: bootstrap recorded c = {:.17g}, "
@@ -652,7 +659,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   config.b = bChain;
   config.tau = plan.norm.tailThreshold(size_t(slot));
   config.stratifyLargeSteps = stratify;
-  config.importance = importance;
+  config.target = shape;
   config.luminanceTau = norm.luminanceTailThreshold(size_t(slot));
   Pcg32 acceptRng = chainRng(s.seed, unit.index, 1);
   const ChainCounts counts = runChain(*state, chainTarget, config, sink, acceptRng, unit.mutations, current, c0, scratch);
@@ -681,7 +688,7 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   st.largeStepSums.assign(slot + 1, TargetSums{});
   st.largeStepSums[slot] = counts.largeSteps;
   quantizeSums(st.largeStepSums[slot], s.seed, unit.index, uint64_t(slot));
-  if (importance) {
+  if (shape.shaped()) {
     st.largeStepLuminanceSums.assign(slot + 1, TargetSums{});
     st.largeStepLuminanceSums[slot] = counts.largeStepsLuminance;
     quantizeSums(st.largeStepLuminanceSums[slot], s.seed, unit.index, kLuminanceSumsKey + uint64_t(slot));
@@ -756,7 +763,7 @@ std::vector<double> markovChainLayerScales(const JobPlan& plan, const PartialRes
   const size_t slots = norm.mutationsPerLength.size();
   for (size_t slot = 0; slot < M.size() && slot < slots && largeStepLayer(slot, slots) < scales.size(); ++slot)
     if (M[slot] > 0) scales[largeStepLayer(slot, slots)] = chainSplatScale(norm.weightB(slot), M[slot], P);
-  if (!norm.importance.empty()) scaleToLuminance(norm, merged, scales);  // (D8)
+  if (norm.target().shaped()) scaleToLuminance(norm, merged, scales);  // (D8)
   return scales;
 }
 

@@ -85,6 +85,12 @@ class ChainJobSpec {
     (void)settings;
     return 0;
   }
+  // The target's power beta (common/mlt/target.h (T1)): 1 (the default), c is linear in the path's light;
+  // below 1, a tempered target. veach-mlt keeps 1.
+  virtual double targetPower(const RenderSettings& settings) const {
+    (void)settings;
+    return 1;
+  }
 };
 
 // The shortest path length a per-length method's chains cover: 1, or directPassSegments + 1 when the
@@ -228,7 +234,7 @@ struct RefinedB {
 };
 // film (optional): the merged film, whose bStrataLayer(slot) layers post-stratify the large steps' bulk (D6).
 RefinedB refinedB(const Normalization& norm, const ChainStats& merged, const Film* film = nullptr);
-// With a relative target (Normalization::importance): b_lum per slot, the image's brightness, pooled from the
+// With a shaped target (Normalization::target: a map or a power): b_lum per slot, the image's brightness, pooled from the
 // bootstrap's luminance and the large steps' (develop.h (D3) for luminance, without strata; (D8)).
 RefinedB refinedLuminanceB(const Normalization& norm, const ChainStats& merged);
 // The quantization key of the large steps' luminance sums of a slot: kLuminanceSumsKey + slot (apart from

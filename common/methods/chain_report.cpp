@@ -60,14 +60,14 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.method = s.method;
   r.settings = s;
   // b as developed: pooled from the bootstrap and the large steps merged (develop.h (D3), (D4)); with a
-  // relative target the image's brightness, b_lum, to which each length's image is scaled (D8).
-  const bool relative = !norm.importance.empty();
-  const RefinedB refined = relative ? refinedLuminanceB(norm, merged.stats) : refinedB(norm, merged.stats, &merged.film);
+  // relative or tempered target the image's brightness, b_lum, to which each length's image is scaled (D8).
+  const bool shaped = norm.target().shaped();
+  const RefinedB refined = shaped ? refinedLuminanceB(norm, merged.stats) : refinedB(norm, merged.stats, &merged.film);
   r.b = refined.total.b;
   r.bStdErr = refined.total.stdErr;
   r.bBootstrap = norm.b;
   r.bBootstrapStdErr = norm.bStdErr;
-  if (relative) {  // the bootstrap's b_lum alone: no large steps pooled
+  if (shaped) {  // the bootstrap's b_lum alone: no large steps pooled
     const BEstimate boot = refinedLuminanceB(norm, ChainStats{}).total;
     r.bBootstrap = boot.b;
     r.bBootstrapStdErr = boot.stdErr;

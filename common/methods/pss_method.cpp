@@ -30,12 +30,23 @@ std::vector<ParamSpec> PrimarySampleChainMethod::params() const {
                "proportion to their brightness, brighter ones alike";
   floor.min = 1e-3;
   floor.max = 1e3;
-  return {target, floor};
+  ParamSpec power;
+  power.name = "target-power";
+  power.type = ParamSpec::Type::Double;
+  power.defaultValue = kDefaultTargetPower;
+  power.help = "the target raised to this power (common/mlt/target.h (T1)): below 1 a tempered target, flatter along "
+               "paths and over the image (docs/CHAINS.md: about 1.5x lower error on glossy-plates at 0.65-0.8, "
+               "several times higher on the caustic scenes)";
+  power.min = 0.05;
+  power.max = 1;
+  return {target, floor, power};
 }
 
 double PrimarySampleChainMethod::importanceFloor(const RenderSettings& s) const {
   return paramText(s, "target") == "relative" ? param(s, "target-floor") : 0.0;
 }
+
+double PrimarySampleChainMethod::targetPower(const RenderSettings& s) const { return param(s, "target-power"); }
 
 void PrimarySampleChainMethod::validate(const RenderSettings& s) const {
   RenderMethod::validate(s);
@@ -62,6 +73,7 @@ void PrimarySampleChainMethod::addMetadata(const JobPlan& plan, const PartialRes
   // The target (importance.h): its name, the relative one's floor and its map's tile size (no map: the pilot
   // saw no light, and the target was luminance).
   m.strings["target"] = paramText(plan.settings, "target");
+  if (plan.norm.targetPower != 1) m.numbers["targetPower"] = plan.norm.targetPower;
   if (const double floor = importanceFloor(plan.settings); floor > 0) {
     m.numbers["targetFloor"] = floor;
     m.numbers["importanceTileSize"] = plan.norm.importance.empty() ? 0 : plan.norm.importance.tileSize;

@@ -16,9 +16,11 @@ namespace mlt {
 
 class PathEvaluator;
 
-// The target's defaults (params "target", "target-floor"; docs/CHAINS.md, "A relative target": measured).
+// The target's defaults (params "target", "target-floor", "target-power"; docs/CHAINS.md, "A relative
+// target" and "A tempered target": measured).
 inline constexpr const char* kDefaultTarget = "luminance";
 inline constexpr const char* kDefaultTargetFloor = "0.5";
+inline constexpr const char* kDefaultTargetPower = "1";
 
 class PrimarySampleChainMethod : public RenderMethod, public ChainJobSpec {
  public:
@@ -26,10 +28,12 @@ class PrimarySampleChainMethod : public RenderMethod, public ChainJobSpec {
   MethodFamily family() const final { return MethodFamily::MarkovChain; }
   std::vector<std::string> mutationKinds() const override { return {"large", "small"}; }  // index = MutationType
   std::unique_ptr<ChainState> makeState(KelemenSource& source, const RenderSettings& settings) const override;
-  // The target (common/mlt/importance.h): "target" luminance (the default) or relative, and "target-floor"
-  // kappa of the relative one. A method with parameters of its own appends them to these.
+  // The target (common/mlt/importance.h, target.h): "target" luminance (the default) or relative,
+  // "target-floor" kappa of the relative one, and "target-power" beta of either (T1). A method with
+  // parameters of its own appends them to these.
   std::vector<ParamSpec> params() const override;
   double importanceFloor(const RenderSettings& settings) const override;
+  double targetPower(const RenderSettings& settings) const override;
 
   void validate(const RenderSettings& settings) const override;
   JobPlan plan(const RenderScene& scene, const RenderSettings& settings) const override;

@@ -33,7 +33,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     const Proposal p = state.propose();
     y->clear();
     target.evaluate(*y);
-    const double cy = targetFunction(*y, config.importance);
+    const double cy = targetFunction(*y, config.target);
     double ratio = p.tRatio * cy / cx;
     if (config.acceptancePower != 1) ratio = std::pow(ratio, config.acceptancePower);
     const double a = std::isfinite(ratio) ? std::min(1.0, ratio) : (cy > 0 ? 1.0 : 0.0);
@@ -43,7 +43,7 @@ ChainCounts runChain(ChainState& state, ChainTarget& target, const ChainConfig& 
     ++counts.proposed[kind];
     if (p.independent) {
       counts.largeSteps.add(cy, config.tau);
-      if (config.importance) counts.largeStepsLuminance.add(targetFunction(*y), config.luminanceTau);
+      if (config.target.shaped()) counts.largeStepsLuminance.add(targetFunction(*y), config.luminanceTau);
       if (config.stratifyLargeSteps) {
         const Vec2 u = state.stratumPoint();
         if (u.x >= 0 && u.y >= 0) sink.stratumSample(u, std::min(cy, config.tau));

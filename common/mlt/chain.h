@@ -38,6 +38,7 @@
 #include "common/integrators/path_evaluator.h"
 #include "common/mlt/importance.h"
 #include "common/mlt/kelemen_source.h"
+#include "common/mlt/target.h"
 #include "common/mlt/target_sums.h"
 
 namespace mlt {
@@ -98,10 +99,10 @@ struct ChainConfig {
   // Post-stratify the large steps (develop.h (D6)): pass each one's bulk and ChainState::stratumPoint to
   // ChainSink::stratumSample.
   bool stratifyLargeSteps = false;
-  // The target's importance map (importance.h (R2)); null: c is the path's luminance. The start state's
-  // c (runChain's cx) must have been computed with the same map.
-  const ImportanceMap* importance = nullptr;
-  // With a map: the tail threshold of the large steps' luminance sums (ChainCounts::largeStepsLuminance).
+  // The target's importance map (importance.h (R2)) and power (target.h (T1)); none and 1: c is the path's
+  // luminance. The start state's c (runChain's cx) must have been computed with the same shape.
+  TargetShape target;
+  // With a shaped target: the tail threshold of the large steps' luminance sums (ChainCounts::largeStepsLuminance).
   double luminanceTau = std::numeric_limits<double>::infinity();
   // a = min(1, (T-ratio * c(y)/c(x))^acceptancePower). 1 for every correct chain; the 1D tests set 0.5
   // (a deliberately wrong chain, sampling c^(1/2)) to show that they can fail.
@@ -122,7 +123,7 @@ struct ChainCounts {
   // c(y) of every independent proposal (a large step), accepted or not: uniform samples of the target,
   // which refine b as the job runs (develop.h (D3)).
   TargetSums largeSteps;
-  // With an importance map (ChainConfig::importance): the luminance of those proposals (b_lum, develop.h (D8)).
+  // With a shaped target (ChainConfig::target): the luminance of those proposals (b_lum, develop.h (D8)).
   TargetSums largeStepsLuminance;
 };
 
