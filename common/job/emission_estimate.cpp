@@ -178,7 +178,7 @@ EmissionEstimate emissionEstimate(const RenderScene& scene, const RenderSettings
 
   // 2. Fresh stratified rays per cell; per-row sums of I_j^ and of its variance estimate, reduced in row order.
   std::vector<double> rowMean(size_t(Y), 0.0), rowVar(size_t(Y), 0.0);
-  std::vector<double> rowLum(size_t(Y), 0.0), rowLumVar(size_t(Y), 0.0);  // unweighted (a map only)
+  std::vector<double> rowLum(size_t(Y), 0.0), rowLumVar(size_t(Y), 0.0);  // luminance (a shaped target only)
   const bool weighted = target.hasMap(), shaped = target.shaped();
   const double beta = target.power;  // (T1): each ray's c = (h L_e)^beta = h^beta L_e^beta
   forRows(Y, parallel, [&](int y) {
