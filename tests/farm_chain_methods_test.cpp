@@ -202,35 +202,34 @@ TEST(FarmChainMethods, MmltWithTheEmissionPassOnTwoWorkersMatchesTheInProcessRen
   EXPECT_GT(r.local.plan.units.size(), size_t(r.local.plan.settings.chains)) << "no units of the pass";
 }
 
-// The relative target (common/mlt/importance.h): the coordinator's plan carries the importance map and
-// b_lum's bootstrap estimate to the workers, their chains' target reads the map, their partials carry the
+// A shaped target: the relative one (common/mlt/importance.h: the coordinator's plan carries the importance
+// map to the workers and their chains' target reads it) and a tempered one (common/mlt/target.h (T1): the
+// plan carries the power). Either way the plan carries b_lum's bootstrap estimate, the partials carry the
 // large steps' luminance sums, and the merged image is scaled to b_lum (develop.h (D8)): the in-process
 // image, bit for bit, with the same b.
-TEST(FarmChainMethods, MmltWithTheRelativeTargetOnTwoWorkersMatchesTheInProcessRender) {
-  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
-                                    "--method mmlt --target relative --seed 7 --width 32 --height 32 "
-                                    "--mutations-per-pixel 8 --chains 24 --bootstrap 4000",
-                                    "mmlt-relative");
-  expectSameImageAndStatistics(r, "mmlt");
-  EXPECT_EQ(text(r.farm, "target"), "relative");
-  EXPECT_EQ(number(r.farm, "targetFloor"), 0.5);
-  EXPECT_FALSE(r.local.plan.norm.importance.empty());
-  EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
-}
-
-// A tempered target (common/mlt/target.h (T1)): the power travels with the plan, and the farm's image is the
-// in-process one, bit for bit, scaled to b_lum (develop.h (D8)) from the workers' luminance sums.
-TEST(FarmChainMethods, MmltWithATemperedTargetOnTwoWorkersMatchesTheInProcessRender) {
-  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
-                                    "--method mmlt --target-power 0.7 --seed 7 --width 32 --height 32 "
-                                    "--mutations-per-pixel 8 --chains 24 --bootstrap 4000",
-                                    "mmlt-tempered");
-  expectSameImageAndStatistics(r, "mmlt");
-  EXPECT_EQ(text(r.farm, "target"), "luminance");
-  EXPECT_EQ(number(r.farm, "targetPower"), 0.7);
-  EXPECT_TRUE(r.local.plan.norm.importance.empty());
-  EXPECT_EQ(r.local.plan.norm.targetPower, 0.7);
-  EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
+TEST(FarmChainMethods, MmltWithAShapedTargetOnTwoWorkersMatchesTheInProcessRender) {
+  struct Shape {
+    const char* options;
+    const char* target;
+    bool map;
+    double power;
+  };
+  for (const Shape& shape : {Shape{"--target relative", "relative", true, 1.0},
+                             Shape{"--target-power 0.7", "luminance", false, 0.7}}) {
+    SCOPED_TRACE(shape.options);
+    const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
+                                      std::string("--method mmlt ") + shape.options +
+                                          " --seed 7 --width 32 --height 32 --mutations-per-pixel 8 --chains 24 "
+                                          "--bootstrap 4000",
+                                      std::string("mmlt-") + shape.target);
+    expectSameImageAndStatistics(r, "mmlt");
+    EXPECT_EQ(text(r.farm, "target"), shape.target);
+    if (shape.map) EXPECT_EQ(number(r.farm, "targetFloor"), 0.5);
+    if (shape.power != 1) EXPECT_EQ(number(r.farm, "targetPower"), shape.power);
+    EXPECT_EQ(r.local.plan.norm.importance.empty(), !shape.map);
+    EXPECT_EQ(r.local.plan.norm.targetPower, shape.power);
+    EXPECT_FALSE(r.local.plan.norm.bootstrapLuminance.empty());
+  }
 }
 
 }  // namespace
