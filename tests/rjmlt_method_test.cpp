@@ -35,10 +35,11 @@ TEST(RjmltMethod, IsRegisteredWithItsKindsAndParams) {
   EXPECT_TRUE(isMarkovChainMethod("rjmlt"));
   EXPECT_EQ(mutationKindNames("rjmlt"), (std::vector<std::string>{"large", "small", "technique"}));
   const auto params = findMethod("rjmlt").params();  // the family's target parameters, then its own
-  ASSERT_EQ(params.size(), 3u);
+  ASSERT_EQ(params.size(), 4u);
   EXPECT_EQ(params[0].name, "target");
   EXPECT_EQ(params[1].name, "target-floor");
-  EXPECT_EQ(params[2].name, "technique-step");
+  EXPECT_EQ(params[2].name, "target-power");
+  EXPECT_EQ(params[3].name, "technique-step");
   RenderSettings s;
   s.method = "rjmlt";
   s.largeStepProb = 0.97f;
