@@ -127,12 +127,12 @@ TEST(ImportanceTarget, WeightsEachSplatByItsTile) {
   p.splats.push_back({Vec2(0.2f, 0.5f), Color(1.0f)});
   p.splats.push_back({Vec2(2.7f, 0.5f), Color(0.25f, 0.5f, 1.0f)});
   const double c = double(luminance(Color(1.0f))) * 0.5 + double(luminance(Color(0.25f, 0.5f, 1.0f))) * 4.0;
-  EXPECT_NEAR(targetFunction(p, &m), c, 1e-12);
-  EXPECT_EQ(targetFunction(p, nullptr), targetFunction(p));  // no map: the luminance of the total
+  EXPECT_NEAR(targetFunction(p, TargetShape{&m}), c, 1e-12);
+  EXPECT_EQ(targetFunction(p, TargetShape{nullptr}), targetFunction(p));  // no map: the luminance of the total
   const ImportanceMap none;
-  EXPECT_EQ(targetFunction(p, &none), targetFunction(p));
+  EXPECT_EQ(targetFunction(p, TargetShape{&none}), targetFunction(p));
   p.splats[0].L = Color(-100.0f);  // a negative total is no valid target
-  EXPECT_EQ(targetFunction(p, &m), 0.0);
+  EXPECT_EQ(targetFunction(p, TargetShape{&m}), 0.0);
 }
 
 TEST(TemperedTarget, RaisesTheWeightedSumToItsPower) {
@@ -140,7 +140,7 @@ TEST(TemperedTarget, RaisesTheWeightedSumToItsPower) {
   PathContribution p;
   p.splats.push_back({Vec2(0.2f, 0.5f), Color(1.0f)});
   p.splats.push_back({Vec2(2.7f, 0.5f), Color(0.25f, 0.5f, 1.0f)});
-  const double lum = targetFunction(p), weighted = targetFunction(p, &m);
+  const double lum = targetFunction(p), weighted = targetFunction(p, TargetShape{&m});
   EXPECT_NEAR(targetFunction(p, TargetShape{nullptr, 0.5}), std::sqrt(lum), 1e-12);
   EXPECT_NEAR(targetFunction(p, TargetShape{&m, 0.7}), std::pow(weighted, 0.7), 1e-12);
   EXPECT_EQ(targetFunction(p, TargetShape{&m, 1}), weighted);  // power 1: the same bits

@@ -48,8 +48,5 @@ inline double targetFunction(const PathContribution& path, const TargetShape& sh
   if (!(std::isfinite(c) && c > 0)) return 0.0;
   return shape.power == 1 ? c : std::pow(c, shape.power);
 }
-inline double targetFunction(const PathContribution& path, const ImportanceMap* importance) {
-  return targetFunction(path, TargetShape{importance, 1});
-}
 
 }  // namespace mlt
