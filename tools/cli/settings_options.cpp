@@ -75,6 +75,12 @@ RenderSettingsOptions::RenderSettingsOptions(std::string description, std::strin
           ->capture_default_str()
           ->check(CLI::IsMember({"auto", "chains", "separate", "emission"}));
   add_flag("--separate-direct", separateDirect_, "The same as --direct-light separate")->excludes(directLight);
+  add_option("--mis-heuristic", heuristic_,
+             "The multiple importance weights of pt's two strategies and bdpt's (s,t) strategies, and so of the "
+             "chain methods over them (mmlt's target is one strategy's weighted contribution): power (exponent 2) "
+             "or balance")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"power", "balance"}));
   maxDepthOpt_ = add_option("--max-depth", maxDepth_,
                             "Maximum path length in segments (edges): 1 = directly visible emitters "
                             "only, 2 = direct lighting, ...; -1 = unlimited (default: the scene's "
@@ -145,6 +151,7 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.kelemenS2 = s2_;
   s.gaussianSigma = sigma_;
   s.splatting = splattingFromName(splatting_).value();  // empty or one of the names --splatting accepts
+  s.integrator.heuristic = heuristic_ == "balance" ? MisHeuristic::Balance : MisHeuristic::Power;
   s.directLight = separateDirect_ ? DirectLight::Separate : directLightFromName(directLight_).value();  // a name --direct-light accepts
   // The direct pass without --spp: sized by the plan from the mutations per pixel and the pilot's share of the
   // light (directSppPerMutation, directSppFor), also under a time budget; the scene's sampler sample_count

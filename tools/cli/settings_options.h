@@ -46,7 +46,7 @@ class RenderSettingsOptions : public CLI::Option_group {
   CommandLineSettings settings() const;
 
  private:
-  std::string method_ = "bdpt", kernel_ = "kelemen", splatting_, directLight_ = "auto";
+  std::string method_ = "bdpt", kernel_ = "kelemen", splatting_, directLight_ = "auto", heuristic_ = "power";
   int spp_ = 16, samplesPerUnit_ = 0, width_ = 0, height_ = 0, maxDepth_ = 0, rrDepth_ = 0;
   int chains_ = 0, bootstrap_ = 0;
   double mutationsPerPixel_ = 16;

@@ -50,7 +50,7 @@ MethodSpec parseMethodSpec(const std::string& spec) {
     rest = rest.substr(0, star);
   }
   if (m.label.empty()) m.label = rest;
-  // method[+modifier]...: separate-direct, direct-in-chains, or a method parameter name:value.
+  // method[+modifier]...: separate-direct, direct-in-chains, mis-balance, mis-power, or a method parameter name:value.
   std::vector<std::string> parts;
   for (size_t from = 0;;) {
     const size_t plus = rest.find('+', from);
@@ -68,10 +68,14 @@ MethodSpec parseMethodSpec(const std::string& spec) {
       m.directLight = mod == "separate-direct" ? DirectLight::Separate : DirectLight::Chains;
       continue;
     }
+    if (mod == "mis-balance" || mod == "mis-power") {
+      m.heuristic = mod == "mis-balance" ? MisHeuristic::Balance : MisHeuristic::Power;
+      continue;
+    }
     const size_t colon = mod.find(':');
     if (colon == std::string::npos || colon == 0)
       throw std::invalid_argument("method spec '" + spec + "': '+" + mod +
-                                  "' is neither separate-direct, direct-in-chains nor a parameter name:value");
+                                  "' is neither separate-direct, direct-in-chains, mis-balance, mis-power nor a parameter name:value");
     m.params[mod.substr(0, colon)] = mod.substr(colon + 1);
   }
   try {
@@ -187,6 +191,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   RenderSettings settings = base;
   settings.method = ms.method;
   settings.directLight = ms.directLight;
+  if (ms.heuristic) settings.integrator.heuristic = *ms.heuristic;
   for (const auto& [name, value] : ms.params) settings.params[name] = value;
   if (separatesDirect(settings)) settings.spp = 0;  // the direct pass sized by the plan from the work (mutations per pixel)
   settings.chains = cfg.base.chains;

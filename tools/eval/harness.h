@@ -24,17 +24,19 @@
 
 namespace mlt::eval {
 
-// "[label=]method[+separate-direct|+direct-in-chains][+name:value]...[*scale]": e.g. "pt", "mmlt",
+// "[label=]method[+separate-direct|+direct-in-chains][+mis-balance|+mis-power][+name:value]...[*scale]": e.g. "pt", "mmlt",
 // "mmlt-sd=mmlt+separate-direct", "mmlt-lum=mmlt+target:luminance" (a method parameter, RenderMethod::params,
 // as --name value would set it), "pt-biased=pt*1.05". +separate-direct: the method renders the direct
 // light by a pt pass (RenderSettings::directLight Separate, the direct pass sized by the plan: directSppFor);
 // +direct-in-chains: by its chains (Chains); without either the plan decides (Auto, direct_light_rule.h).
-// Both are refused for a method that cannot render the direct light apart. A scale other than 1
+// Both are refused for a method that cannot render the direct light apart. +mis-balance / +mis-power: the
+// MIS heuristic (IntegratorSettings::heuristic, --mis-heuristic); without either, the harness's base. A scale other than 1
 // multiplies every developed image of the method: a test hook for a deliberately biased method.
 struct MethodSpec {
   std::string label;
   std::string method = "pt";
   DirectLight directLight = DirectLight::Auto;
+  std::optional<MisHeuristic> heuristic;
   double testScale = 1.0;
   MethodParams params;  // the method's own parameters (checked by the method)
 };
