@@ -101,7 +101,7 @@ TEST(CliSettings, RenderAndSubmitDeclareTheSameSettingOptionsOnce) {
   for (const OptionShape& o : r) names.insert(o.names);
   for (const char* expected :
        {"-m,--method", "--spp", "--samples-per-unit", "--mutations-per-pixel", "--chains", "--bootstrap",
-        "--large-step", "--kernel", "--s1", "--s2", "--sigma", "--splatting", "--direct-light", "--separate-direct", "--max-depth",
+        "--large-step", "--kernel", "--s1", "--s2", "--sigma", "--splatting", "--direct-light", "--separate-direct", "--mis-heuristic", "--max-depth",
         "--rr-depth", "--seed", "--width", "--height", "-D,--define"})
     EXPECT_TRUE(names.count(expected)) << expected << " is not a shared setting option";
   // ... and one option per registered method parameter (--<name>, e.g. veach-mlt's --veach-lens).
@@ -111,7 +111,7 @@ TEST(CliSettings, RenderAndSubmitDeclareTheSameSettingOptionsOnce) {
       params.insert(p.name);
       EXPECT_TRUE(names.count("--" + p.name)) << "--" << p.name << " is not a shared setting option";
     }
-  EXPECT_EQ(names.size(), 20u + params.size());
+  EXPECT_EQ(names.size(), 21u + params.size());
   // Nothing declared twice: no option of the command itself has a name of a setting option.
   for (const Command* c : {&render, &submit})
     for (const CLI::Option* opt : c->sub->get_options()) {
@@ -127,7 +127,8 @@ TEST(CliSettings, SameArgumentsGiveTheSameSettings) {
       "-m", "mmlt", "--kernel", "gaussian", "--sigma", "0.02", "--splatting", "kelemen-mis", "--separate-direct",
       "--seed", "9", "--width", "40", "--height", "30", "--max-depth", "6", "--rr-depth", "3", "--spp", "4",
       "--samples-per-unit", "2", "--mutations-per-pixel", "3.5", "--chains", "12", "--bootstrap", "5000",
-      "--large-step", "0.25", "--s1", "0.002", "--s2", "0.03", "-D", "a=1", "--define", "b=x=y"};
+      "--large-step", "0.25", "--s1", "0.002", "--s2", "0.03", "--mis-heuristic", "balance", "-D", "a=1",
+      "--define", "b=x=y"};
   const CommandLineSettings r = parseRender(args), s = parseSubmit(args);
   expectSame(r, s);
   // And they are the values typed (a parser that dropped an option would still agree with itself).
@@ -142,6 +143,7 @@ TEST(CliSettings, SameArgumentsGiveTheSameSettings) {
   EXPECT_EQ(v.height, 30);
   EXPECT_EQ(v.integrator.maxDepth, 6);
   EXPECT_EQ(v.integrator.rrDepth, 3);
+  EXPECT_EQ(v.integrator.heuristic, MisHeuristic::Balance);
   EXPECT_EQ(v.spp, 4);
   EXPECT_EQ(v.samplesPerUnit, 2);
   EXPECT_EQ(v.mutationsPerPixel, 3.5);
@@ -237,6 +239,23 @@ TEST(CliSettings, DirectLightIsAutoUnlessGivenAndTravelsByName) {
   }
 }
 
+// --mis-heuristic: power unless given (the renderer's default, IntegratorSettings), balance as typed; the
+// wire carries it by name and reads it back.
+TEST(CliSettings, MisHeuristicIsPowerUnlessGivenAndTravelsByName) {
+  EXPECT_EQ(parseSubmit({"-m", "bdpt"}).settings.integrator.heuristic, MisHeuristic::Power);
+  EXPECT_EQ(RenderSettings{}.integrator.heuristic, MisHeuristic::Power);
+  for (const auto& [name, value] : {std::pair<const char*, MisHeuristic>{"power", MisHeuristic::Power},
+                                    {"balance", MisHeuristic::Balance}}) {
+    const std::vector<std::string> args{"-m", "mmlt", "--mis-heuristic", name};
+    const CommandLineSettings r = parseRender(args), s = parseSubmit(args);
+    expectSame(r, s);
+    EXPECT_EQ(s.settings.integrator.heuristic, value) << name;
+    const v1::RenderSettings wire = onTheWire(s);
+    EXPECT_EQ(wire.mis_heuristic(), name);
+    EXPECT_EQ(wire::fromProto(wire).settings.integrator.heuristic, value) << name;
+  }
+}
+
 TEST(CliSettings, BadValuesAreErrorsNamingTheOption) {
   struct Case {
     std::vector<std::string> args;
@@ -244,6 +263,7 @@ TEST(CliSettings, BadValuesAreErrorsNamingTheOption) {
   };
   for (const Case& k : std::vector<Case>{{{"--kernel", "nonsense"}, "--kernel"},
                                           {{"--splatting", "veach"}, "--splatting"},
+                                          {{"--mis-heuristic", "max"}, "--mis-heuristic"},
                                           {{"--sigma", "0"}, "--sigma"},
                                           {{"--sigma", "1.5"}, "--sigma"},
                                           {{"--s1", "-0.1"}, "--s1"},

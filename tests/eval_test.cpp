@@ -336,6 +336,12 @@ TEST(EvalHarness, MethodSpecs) {
   EXPECT_THROW(parseMethodSpec("pt+separate-direct"), std::invalid_argument);  // pt has no direct pass apart
   EXPECT_THROW(parseMethodSpec("pssmlt+direct-in-chains"), std::invalid_argument);
   EXPECT_THROW(parseMethodSpec("pssmlt+separate-direct"), std::invalid_argument);  // its splats carry no length
+  // The MIS heuristic: the harness's base unless +mis-balance or +mis-power.
+  EXPECT_FALSE(parseMethodSpec("mmlt").heuristic.has_value());
+  EXPECT_EQ(parseMethodSpec("mb=mmlt+mis-balance").heuristic, MisHeuristic::Balance);
+  EXPECT_EQ(parseMethodSpec("bdpt+mis-power").heuristic, MisHeuristic::Power);
+  EXPECT_EQ(parseMethodSpec("rjmlt+separate-direct+mis-balance").directLight, DirectLight::Separate);
+  EXPECT_THROW(parseMethodSpec("mmlt+mis-max"), std::invalid_argument);  // neither a modifier nor name:value
   // A method's own parameters, name:value, checked by the method.
   const MethodSpec rel = parseMethodSpec("rel=mmlt+target:relative+target-floor:0.25");
   EXPECT_EQ(rel.label, "rel");
