@@ -156,6 +156,17 @@ TEST_F(Cli, RenderWritesExrWithMetadataAndPngAndIsThreadCountIndependent) {
     sum += a.rgb[i].g;
   }
   EXPECT_GT(sum, 0.0);  // the light reaches the camera
+  // --mis-heuristic reaches the renderer (other weights, other pixels) and the metadata says so; the
+  // default (power) writes no entry, so a default render's bytes stay those of earlier versions.
+  EXPECT_EQ(a.metadata.strings.count("misHeuristic"), 0u);
+  const RunResult bal = run("render " + scene + common + "--mis-heuristic balance -o " + (dir / "bal.exr").string());
+  ASSERT_EQ(bal.exitCode, 0) << bal.output;
+  const ExrImage c = readExr((dir / "bal.exr").string());
+  EXPECT_EQ(c.metadata.strings.at("misHeuristic"), "balance");
+  ASSERT_EQ(c.rgb.size(), a.rgb.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) differ += a.rgb[i].g != c.rgb[i].g;
+  EXPECT_GT(differ, a.rgb.size() / 4);
 }
 
 // The summary line of a sample method names it (it once passed the method's std::string to printf's %s,

@@ -16,6 +16,8 @@ ImageMetadata imageMetadata(const JobPlan& plan, const PartialResult& merged, co
   m.numbers["height"] = plan.settings.height;
   m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
   m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
+  // Only when not the default, so that a default render's bytes stay those of every earlier version.
+  if (plan.settings.integrator.heuristic == MisHeuristic::Balance) m.strings["misHeuristic"] = "balance";
   m.numbers["workUnits"] = double(merged.units.size());
   m.numbers["workUnitsPlanned"] = double(plan.units.size());
   m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());
