@@ -4,6 +4,7 @@
 
 #include "common/methods/registry.h"
 #include "common/settings/direct_light_name.h"
+#include "common/settings/mis_heuristic_name.h"
 #include "common/settings/splatting_name.h"
 
 #include <google/protobuf/io/coded_stream.h>
@@ -87,7 +88,7 @@ v1::RenderSettings toProto(const SubmittedSettings& sub) {
   p.set_rr_depth(s.integrator.rrDepth);
   p.set_has_max_depth(hasMaxDepth);
   p.set_has_rr_depth(hasRrDepth);
-  p.set_mis_heuristic(s.integrator.heuristic == MisHeuristic::Balance ? "balance" : "power");
+  p.set_mis_heuristic(misHeuristicName(s.integrator.heuristic));
   v1::SampleSettings samples;
   samples.set_spp(s.spp);
   samples.set_samples_per_unit(s.samplesPerUnit);
@@ -145,8 +146,8 @@ SubmittedSettings fromProto(const v1::RenderSettings& p) {
     requireRange("settings.rr_depth", p.rr_depth(), 0, kMaxDepth);
     s.integrator.rrDepth = int(p.rr_depth());
   }
-  if (p.mis_heuristic() == "balance") s.integrator.heuristic = MisHeuristic::Balance;
-  else if (p.mis_heuristic() == "power" || p.mis_heuristic().empty()) s.integrator.heuristic = MisHeuristic::Power;
+  if (p.mis_heuristic().empty()) s.integrator.heuristic = MisHeuristic::Power;  // a writer that did not set it
+  else if (const std::optional<MisHeuristic> h = misHeuristicFromName(p.mis_heuristic())) s.integrator.heuristic = *h;
   else throw WireError("settings.mis_heuristic", fmt::format("unknown '{}' (balance|power)", p.mis_heuristic()));
   // The family's settings: exactly the group the method reads (the oneof), checked against the method.
   const bool chainMethod = isMarkovChainMethod(s.method);

@@ -1,6 +1,7 @@
 #include "common/methods/image_metadata.h"
 
 #include "common/methods/registry.h"
+#include "common/settings/mis_heuristic_name.h"
 
 namespace mlt {
 
@@ -17,7 +18,8 @@ ImageMetadata imageMetadata(const JobPlan& plan, const PartialResult& merged, co
   m.numbers["maxDepth"] = plan.settings.integrator.maxDepth;
   m.numbers["rrDepth"] = plan.settings.integrator.rrDepth;
   // Only when not the default, so that a default render's bytes stay those of every earlier version.
-  if (plan.settings.integrator.heuristic == MisHeuristic::Balance) m.strings["misHeuristic"] = "balance";
+  if (plan.settings.integrator.heuristic != MisHeuristic::Power)
+    m.strings["misHeuristic"] = misHeuristicName(plan.settings.integrator.heuristic);
   m.numbers["workUnits"] = double(merged.units.size());
   m.numbers["workUnitsPlanned"] = double(plan.units.size());
   m.numbers["nonFiniteSamples"] = double(merged.film.nonFiniteSamples());

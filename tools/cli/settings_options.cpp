@@ -3,6 +3,7 @@
 #include "tools/cli/settings_options.h"
 
 #include "common/settings/direct_light_name.h"
+#include "common/settings/mis_heuristic_name.h"
 #include "common/settings/splatting_name.h"
 #include "proto/convert.h"
 
@@ -151,7 +152,7 @@ CommandLineSettings RenderSettingsOptions::settings() const {
   s.kelemenS2 = s2_;
   s.gaussianSigma = sigma_;
   s.splatting = splattingFromName(splatting_).value();  // empty or one of the names --splatting accepts
-  s.integrator.heuristic = heuristic_ == "balance" ? MisHeuristic::Balance : MisHeuristic::Power;
+  s.integrator.heuristic = misHeuristicFromName(heuristic_).value();  // a name --mis-heuristic accepts
   s.directLight = separateDirect_ ? DirectLight::Separate : directLightFromName(directLight_).value();  // a name --direct-light accepts
   // The direct pass without --spp: sized by the plan from the mutations per pixel and the pilot's share of the
   // light (directSppPerMutation, directSppFor), also under a time budget; the scene's sampler sample_count
