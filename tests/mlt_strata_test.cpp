@@ -118,7 +118,7 @@ const RenderScene& cornell() {
 }
 
 TEST(BStrata, ChainUnitsKeepTheirLargeStepsPerPixelAndBIsDevelopedWithThem) {
-  // One-length methods keep strata; mmlt and rjmlt (chains per length) do not (mlt_job.cpp, runMarkovChain).
+  // One-length methods keep strata; mmlt and rjmlt (chains per length) do not (mlt_job_run.cpp, runMarkovChain).
   for (std::string method : {"pssmlt-bdpt", "pssmlt", "mmlt", "rjmlt"}) {
     const bool stratified = method == "pssmlt-bdpt" || method == "pssmlt";
     RenderSettings s;

@@ -62,11 +62,11 @@ constexpr uint64_t kEmissionMinCells = uint64_t(1) << 16;
 // large steps at ~7% standard error at 16 s, most of the image's brightness error there (docs/CHAINS.md).
 // Where a cell the marks do not cover still holds kEmissionMaxCellShare or more of the pilot's emission (a
 // long light thinner than a cell, which the marks leave to the pilot), or nothing is seen at all, the
-// bootstrap keeps the candidates' b_1 (mlt_job.cpp); a uniform light of N cells holds 1/N per cell (the
+// bootstrap keeps the candidates' b_1 (mlt_job_bootstrap.cpp); a uniform light of N cells holds 1/N per cell (the
 // Cornell box's: 0.3%). The choice reads the pilot and the geometry only, which are independent of both
 // estimates, so whichever is chosen stays unbiased.
 // A scene of many lights gets fewer points per light (at least 64), kFootprintPointBudget in all: the
-// marks are drawn by the bootstrap and by every unit of the emission pass (mlt_job.cpp).
+// marks are drawn by the bootstrap and by every unit of the emission pass (mlt_job_bootstrap.cpp, mlt_job_run.cpp).
 constexpr uint32_t kFootprintPoints = 4096;
 constexpr uint64_t kFootprintPointBudget = uint64_t(1) << 18;
 constexpr uint64_t kFootprintMaxCells = 256;

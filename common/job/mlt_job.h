@@ -2,7 +2,9 @@
 // development. Shared by every method of that kind (pssmlt, pssmlt-bdpt, mmlt; their folders under
 // common/methods/ and the base class common/methods/pss_method.h): a method supplies a ChainJobSpec,
 // its target function and its chain state, and this code does the rest the same way for all of them.
-// Implemented in common/job/mlt_job.cpp (with common/mlt/).
+// Implemented in common/job/ (with common/mlt/), one file per step: mlt_job_settings.cpp (what a job resolves and
+// checks first), mlt_job_bootstrap.cpp, mlt_job_plan.cpp (chain allocation), mlt_job_run.cpp (one work unit) and
+// mlt_job_develop.cpp (b refined, the image).
 #pragma once
 #include <memory>
 #include <optional>
@@ -269,8 +271,14 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& scene, c
 // kDirectPassMethod (pt) with at most kDirectMaxSegments segments (pixel samples; a bdpt pass would add t = 1
 // splats in layer 0).
 bool isDirectUnit(const WorkUnit& unit);
+// The direct pass's settings: kDirectPassMethod limited to directPassSegments.
+RenderSettings directPassSettings(const RenderSettings& settings);
 PartialResult runDirectUnit(const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Runs one chain (unit.startCandidate, unit.mutations, ...) and returns its raw splat sums + stats.
+// It first replays its start candidate and checks that the c it gets is the bootstrap's, to this relative
+// tolerance: the same code on the same numbers is bit-exact on one machine; the tolerance only absorbs a
+// different compiler's float contraction between the coordinator and a worker.
+constexpr double kReplayTolerance = 1e-5;
 PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene, const JobPlan& plan, const WorkUnit& unit);
 // Normalization of the merged chains (b * P / M per length; see mlt/develop.h).
 std::vector<Color> developMarkovChainImage(const JobPlan& plan, const PartialResult& merged);

@@ -1,5 +1,5 @@
 // How a chain job's mutations are shared among path lengths (mmlt, rjmlt: one set of chains per length),
-// from the bootstrap's candidates. The plan allocates by these weights (mlt_job.cpp), and the bootstrap's
+// from the bootstrap's candidates. The plan allocates by these weights (mlt_job_plan.cpp), and the bootstrap's
 // budget prices the chains' mix of lengths by the same weights (bootstrap.cpp, chainMixCost), so that
 // a bootstrap sized as a share of the chains' time takes that share.
 #pragma once

@@ -57,7 +57,7 @@
 // one-length method (pssmlt, pssmlt-bdpt; veach-mlt's b samples alike) keeps, per pixel of its Camera[0,1]
 // coordinates, the count and sums of its large steps' m in film layer bStrataLayer(k), and m_L in (D3) is
 // the quadtree post-stratified mean of those layers, v_L its estimated variance (D6). mmlt and rjmlt keep
-// none (mlt_job.cpp: no gain on their brightness, 10% of their throughput). Where c varies mostly with the pixel (light or bright walls seen directly) this removes
+// none (mlt_job_run.cpp: no gain on their brightness, 10% of their throughput). Where c varies mostly with the pixel (light or bright walls seen directly) this removes
 // most of the large steps' variance (the bootstrap's Halton positions do the same for m_0); elsewhere it
 // changes little. The two bulks are then weighted by count, w = N_0 / (N_0 + N_L): both are stratified by
 // film position, and weights from the strata's own variance estimate (which moves with their mean where few

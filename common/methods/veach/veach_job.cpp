@@ -25,8 +25,7 @@
 namespace mlt::veach {
 
 namespace {
-constexpr double kReplayTolerance = 1e-5;  // as mlt_job.cpp: the same code on the same numbers
-constexpr int kStartTries = 16;            // a start strategy whose path evaluates to f = 0 is redrawn
+constexpr int kStartTries = 16;  // a start strategy whose path evaluates to f = 0 is redrawn
 // b refined as the job runs (develop.h (D3)-(D5)). Path-space chains make no large steps, so each chain also
 // evaluates one independent bootstrap candidate (a bdpt sample: c(u) = lum of its MIS-weighted strategies,
 // whose mean is b) per kMutationsPerBSample mutations, from a stream of its own (never the plan's
