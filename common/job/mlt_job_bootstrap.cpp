@@ -115,17 +115,16 @@ void makeImportanceMap(const ChainJobSpec& spec, const RenderScene& scene, const
                                            : std::string("an earlier bootstrap's, not traced again"));
 }
 
-// mmlt, rjmlt: length 1's estimate. b_1 from the camera rays (emission_estimate.h, (E1)) where they estimated
-// it (out.emission->estimated), else from the candidates, drawn again 4x at a time while every one missed a
+// mmlt, rjmlt: length 1's estimate. b_1 from the camera rays e1 (emission_estimate.h, (E1)) where they estimated
+// it (e1.estimated), else from the candidates, drawn again 4x at a time while every one missed a
 // light the rays see; out.result's b and standard error follow. raySeconds: the rays' time (0 if reused).
 void finishLengthOne(const ChainJobSpec& spec, const BootstrapConfig& bc, const BinnedCandidateFnFactory& candidates,
-                     const TargetShape& shape, bool reused, double raySeconds, MarkovChainBootstrap& out) {
-  const std::optional<EmissionEstimate>& e1 = out.emission;
-  const bool raysForLengthOne = e1->estimated;
+                     const TargetShape& shape, const EmissionEstimate& e1, bool reused, double raySeconds,
+                     MarkovChainBootstrap& out) {
   const auto t0 = std::chrono::steady_clock::now();
   LengthBootstrap& l1 = out.result.lengths.front();
   const BootstrapEstimate counted = l1.estimate;  // what out.result.b and bStdErr hold for length 1
-  if (e1->litCells > 0 && !(l1.estimate.b > 0)) {
+  if (e1.litCells > 0 && !(l1.estimate.b > 0)) {
     // The rays see a light that every candidate of length 1 missed (a thin light on a small film): without
     // a candidate that carries light there is no chain of length 1 and the light would be missing from
     // the image. More candidates, 4x at a time, until one carries light.
@@ -142,31 +141,31 @@ void finishLengthOne(const ChainJobSpec& spec, const BootstrapConfig& bc, const 
     if (!(l1.estimate.b > 0))
       spdlog::warn("{}: camera rays see a light ({} lit cells of their pilot) that {} candidates of length 1 "
                    "missed: no chain renders it, and the image lacks it (raise --bootstrap)", spec.name(),
-                   e1->litCells, l1.c.size());
+                   e1.litCells, l1.c.size());
   }
   const double seconds = raySeconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.result.seconds += seconds;
   out.raySeconds = raySeconds;  // the candidates drawn again above are candidates' time
   BootstrapEstimate final = l1.estimate;
-  if (raysForLengthOne) {
-    final = e1->estimate;
+  if (e1.estimated) {
+    final = e1.estimate;
     final.sampleVar = final.bulkVar = l1.estimate.sampleVar;  // a large step of length 1's variance
     if (shape.shaped()) {  // b_lum of length 1 from the same rays, unweighted
       const double var = l1.luminanceEstimate.sampleVar;
-      l1.luminanceEstimate = e1->luminance;
+      l1.luminanceEstimate = e1.luminance;
       l1.luminanceEstimate.sampleVar = l1.luminanceEstimate.bulkVar = var;
     }
     spdlog::info("{}: b_1 = {:.6g} +- {:.2g} from {} camera rays ({}x{} cells per pixel, {} of them on a light's "
                  "outline with {} rays each; {}); the {} candidates of length 1 said {:.6g} +- {:.2g}",
-                 spec.name(), final.b, final.stdErr, e1->rays, e1->cellsPerPixelAxis, e1->cellsPerPixelAxis,
-                 e1->edgeCells, e1->edgeRays,
+                 spec.name(), final.b, final.stdErr, e1.rays, e1.cellsPerPixelAxis, e1.cellsPerPixelAxis,
+                 e1.edgeCells, e1.edgeRays,
                  reused ? std::string("an earlier bootstrap's, not traced again") : fmt::format("{:.3f} s", seconds),
                  l1.c.size(), l1.estimate.b, l1.estimate.stdErr);
   } else {
     spdlog::info("{}: b_1 from the candidates: {} ({:.3f} s)", spec.name(),
-                 e1->litCells == 0 ? std::string("the camera rays' pilot saw no light")
+                 e1.litCells == 0 ? std::string("the camera rays' pilot saw no light")
                                    : fmt::format("one cell of the camera rays' pilot holds {:.2g} of its emission, "
-                                                 "a light a few pixels wide that rays sample badly", e1->maxCellShare),
+                                                 "a light a few pixels wide that rays sample badly", e1.maxCellShare),
                  seconds);
   }
   if (!(final.b == counted.b && final.stdErr == counted.stdErr)) {  // out.result's sums hold `counted`
@@ -285,7 +284,7 @@ MarkovChainBootstrap bootstrapMarkovChainJob(const ChainJobSpec& spec, const Ren
   out.result = runBinnedBootstrap(bc, candidates);
   if (out.pilot) out.result.seconds += out.pilot->seconds;  // the pilot is part of the bootstrap's cost
   if (out.importance) out.result.seconds += out.importance->seconds;
-  if (lengthOne) finishLengthOne(spec, bc, candidates, shape, reused, raySeconds, out);
+  if (lengthOne) finishLengthOne(spec, bc, candidates, shape, *e1, reused, raySeconds, out);  // e1: traced or reused
   if (!spec.chainsPerLength() || s.integrator.maxDepth >= 0) return out;
 
   extendUnlimitedDepth(spec, bc, candidates, out.result);
