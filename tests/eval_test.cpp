@@ -270,6 +270,7 @@ TEST(EvalCsv, RunsRoundTrip) {
   runs[1].planSeconds = 0.125;
   runs[1].metrics.topShare = 0.625;
   runs[1].metrics.pixels = 65536;
+  runs[1].idealRelMSE = 0.0025;
   std::stringstream ss;
   writeRunsCsv(ss, runs);
   auto back = readRunsCsv(ss);
@@ -280,18 +281,28 @@ TEST(EvalCsv, RunsRoundTrip) {
   EXPECT_DOUBLE_EQ(back[1].planSeconds, 0.125);
   EXPECT_DOUBLE_EQ(back[1].metrics.topShare, 0.625);
   EXPECT_EQ(back[1].metrics.pixels, 65536u);
+  EXPECT_DOUBLE_EQ(back[1].idealRelMSE, 0.0025);
+  EXPECT_LT(back[0].idealRelMSE, 0);  // none (a sample method) round-trips as none
   EXPECT_LT(back[0].planSeconds, 0);  // not measured round-trips as not measured
   EXPECT_FALSE(back[0].markovChain);
   EXPECT_NEAR(back[2].metrics.relMSE, runs[2].metrics.relMSE, 1e-8 * runs[2].metrics.relMSE);
   std::stringstream bad("scene,method\n");
   EXPECT_THROW(readRunsCsv(bad), std::runtime_error);
-  // A runs.csv written before top_share is still read (top_share 0).
-  std::string text = ss.str(), old;
+  // A runs.csv written before ideal_relMSE is still read (ideal unknown), and one written before top_share
+  // too (top_share 0).
+  std::string text = ss.str(), old, before22;
   std::stringstream lines(text);
-  for (std::string line; std::getline(lines, line);) {  // drop the last two columns
+  for (std::string line; std::getline(lines, line);) {  // drop the last one, then the last three columns
+    line = line.substr(0, line.rfind(','));
+    before22 += line + "\n";
     line = line.substr(0, line.rfind(','));
     old += line.substr(0, line.rfind(',')) + "\n";
   }
+  std::stringstream without22(before22);
+  auto back22 = readRunsCsv(without22);
+  ASSERT_EQ(back22.size(), runs.size());
+  EXPECT_LT(back22[1].idealRelMSE, 0);
+  EXPECT_DOUBLE_EQ(back22[1].metrics.topShare, 0.625);
   std::stringstream before(old);
   auto oldBack = readRunsCsv(before);
   ASSERT_EQ(oldBack.size(), runs.size());
@@ -422,8 +433,14 @@ TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
       EXPECT_GT(r.acceptance, 0);
       EXPECT_LE(r.acceptance, 1);
       EXPECT_GT(r.chains, 0);
+      // An ideal chain with the run's mutations on the reference: pssmlt's chains render the whole image
+      // here (no pass), and their correlated visits and the reference's own noise put every run above it
+      // (2.7-3.8x when this was written).
+      EXPECT_GT(r.idealRelMSE, 0);
+      EXPECT_LT(r.idealRelMSE, r.metrics.relMSE);
     } else {
       EXPECT_FALSE(r.markovChain);
+      EXPECT_LT(r.idealRelMSE, 0);
       EXPECT_EQ(r.work, r.budget);  // equal samples: spp = budget
     }
   }

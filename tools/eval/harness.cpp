@@ -17,6 +17,7 @@
 #include "common/io/png_io.h"
 #include "common/render/render_scene.h"
 #include "tools/eval/error_map.h"
+#include "tools/eval/ideal_chain.h"
 #include "tools/eval/job_runner.h"
 #include "tools/eval/report.h"
 
@@ -270,11 +271,13 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
         rec.acceptance = p > 0 ? double(a) / double(p) : -1;  // -1: not reported (farm runs)
         rec.chains = out.chains;
         rec.stuckChains = out.stuckChains;
+        if (out.samples > 0) rec.idealRelMSE = idealChainBounds(ref.image, double(out.samples), cfg.eps).luminance;
       }
-      logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}",
+      logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}{}",
                                es.name, ms.label, budget, run, rec.seconds, rec.work, rec.metrics.relMSE,
                                100 * rec.metrics.meanErr,
-                               rec.markovChain ? fmt::format(", acceptance {:.3f}", rec.acceptance) : ""));
+                               rec.markovChain ? fmt::format(", acceptance {:.3f}", rec.acceptance) : "",
+                               rec.idealRelMSE > 0 ? fmt::format(", {:.1f}x an ideal chain's", rec.metrics.relMSE / rec.idealRelMSE) : ""));
       if (bi == largest && cfg.errorMaps) largestImages.emplace_back(rec.metrics.relMSE, std::move(out.image));
       result.runs.push_back(std::move(rec));
     }

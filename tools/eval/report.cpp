@@ -42,18 +42,20 @@ std::string safeName(const std::string& s) {
 
 struct GroupStats {
   double relMSE = 0, relMSEStd = 0, seconds = 0, work = 0, meanErr = 0, meanErrStd = 0, acceptance = -1;
+  double ideal = -1;  // mean of the runs' idealRelMSE (Markov chains), -1 when none has one
   int runs = 0, flagged = 0;
 };
 
 GroupStats groupStats(const std::vector<const RunRecord*>& g) {
   GroupStats s;
-  std::vector<double> e, t, w, m, a;
+  std::vector<double> e, t, w, m, a, id;
   for (const RunRecord* r : g) {
     e.push_back(r->metrics.relMSE);
     t.push_back(r->seconds);
     w.push_back(r->work);
     m.push_back(r->metrics.meanErr);
     if (r->markovChain && r->acceptance >= 0) a.push_back(r->acceptance);
+    if (r->idealRelMSE > 0) id.push_back(r->idealRelMSE);
     if (!r->flags.empty()) ++s.flagged;
   }
   s.runs = int(g.size());
@@ -64,6 +66,7 @@ GroupStats groupStats(const std::vector<const RunRecord*>& g) {
   s.meanErr = mean(m);
   s.meanErrStd = stddev(m);
   if (!a.empty()) s.acceptance = mean(a);
+  if (id.size() == g.size()) s.ideal = mean(id);
   return s;
 }
 
@@ -162,8 +165,11 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
     os << fmt::format("At the largest budget ({:g}{}). *fixed cost*: the calibrated time every run pays whatever its "
                       "budget (bootstrap, planning); a budget below it leaves the method its minimum work.\n\n",
                       cfg.budgets[last], cfg.equalSamples ? "" : " s");
+    os << "*over ideal*: the mean relMSE over that of an ideal chain (independent draws from the luminance target) "
+          "with the same mutations (tools/eval/ideal_chain.h): what the chains' correlation costs where they render "
+          "the whole image (a pass of the direct light can put a method below 1).\n\n";
     os << "| method | relMSE mean +- std | seconds | fixed cost s | work (spp or mutations/px) | "
-          "mean brightness err | acceptance | flagged runs |\n|---|---|---|---|---|---|---|---|\n";
+          "mean brightness err | acceptance | over ideal | flagged runs |\n|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& m : sorted) {
       auto it = groups.find({m, last});
       if (it == groups.end()) continue;
@@ -171,9 +177,10 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
       std::string fixed = "-";
       for (const Calibration& c : result.calibrations)
         if (c.scene == scene && c.method == m) fixed = fmt::format("{:.2f}", c.fixedSeconds);
-      os << fmt::format("| {} | {:.3g} +- {:.2g} | {:.2f} | {} | {:.3g} | {:+.2f}% +- {:.2f}% | {} | {}/{} |\n", m,
+      os << fmt::format("| {} | {:.3g} +- {:.2g} | {:.2f} | {} | {:.3g} | {:+.2f}% +- {:.2f}% | {} | {} | {}/{} |\n", m,
                         s.relMSE, s.relMSEStd, s.seconds, fixed, s.work, 100 * s.meanErr, 100 * s.meanErrStd,
-                        s.acceptance >= 0 ? fmt::format("{:.3f}", s.acceptance) : std::string("-"), s.flagged,
+                        s.acceptance >= 0 ? fmt::format("{:.3f}", s.acceptance) : std::string("-"),
+                        s.ideal > 0 ? fmt::format("{:.2g}x", s.relMSE / s.ideal) : std::string("-"), s.flagged,
                         s.runs);
     }
     os << "\n";

@@ -46,6 +46,10 @@ std::vector<std::string> csvSplit(const std::string& line) {
 
 static const char* kRunsHeader =
     "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
+    "acceptance,chains,stuck_chains,non_finite,flags,plan_seconds,top_share,pixels,ideal_relMSE";
+// The header before ideal_relMSE (read as -1: not known).
+static const char* kRunsHeader22 =
+    "scene,method,mode,budget_index,budget,run,seed,seconds,work,samples,relMSE,MSE,MAE,meanErr,"
     "acceptance,chains,stuck_chains,non_finite,flags,plan_seconds,top_share,pixels";
 // The header before top_share and pixels (runs.csv files written before them are still read; both read as 0).
 static const char* kRunsHeader20 =
@@ -62,12 +66,13 @@ void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
   os << kRunsHeader << "\n";
   for (const RunRecord& r : runs) {
     const ImageMetrics& m = r.metrics;
-    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{},{:.6g},{}\n",
+    os << fmt::format("{},{},{},{},{},{},{},{:.6f},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{},{:.6g},{},{}\n",
                       csvQuote(r.scene), csvQuote(r.method), r.mode, r.budgetIndex, r.budget, r.run, r.seed,
                       r.seconds, r.work, r.samples, m.relMSE, m.mse, m.mae, m.meanErr,
                       r.markovChain && r.acceptance >= 0 ? fmt::format("{:.6g}", r.acceptance) : std::string(), r.chains,
                       r.stuckChains, m.nonFinite, csvQuote(joinFlags(r.flags)),
-                      r.planSeconds >= 0 ? fmt::format("{:.6f}", r.planSeconds) : std::string(), m.topShare, m.pixels);
+                      r.planSeconds >= 0 ? fmt::format("{:.6f}", r.planSeconds) : std::string(), m.topShare, m.pixels,
+                      r.idealRelMSE >= 0 ? fmt::format("{:.6g}", r.idealRelMSE) : std::string());
   }
 }
 
@@ -106,9 +111,9 @@ void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs) {
 
 std::vector<RunRecord> readRunsCsv(std::istream& is) {
   std::string line;
-  if (!std::getline(is, line) || (line != kRunsHeader && line != kRunsHeader20))
+  if (!std::getline(is, line) || (line != kRunsHeader && line != kRunsHeader22 && line != kRunsHeader20))
     throw std::runtime_error("runs.csv line 1: unexpected header (expected '" + std::string(kRunsHeader) + "')");
-  const size_t fields = line == kRunsHeader ? 22 : 20;
+  const size_t fields = line == kRunsHeader ? 23 : line == kRunsHeader22 ? 22 : 20;
   std::vector<RunRecord> runs;
   int lineNo = 1;
   while (std::getline(is, line)) {
@@ -146,6 +151,7 @@ std::vector<RunRecord> readRunsCsv(std::istream& is) {
         r.metrics.topShare = std::stod(f[20]);
         r.metrics.pixels = std::stoull(f[21]);
       }
+      if (fields > 22) r.idealRelMSE = f[22].empty() ? -1 : std::stod(f[22]);
       runs.push_back(std::move(r));
     } catch (const std::logic_error& e) {
       throw std::runtime_error(fmt::format("runs.csv line {}: bad number ({})", lineNo, e.what()));

@@ -32,6 +32,10 @@ struct RunRecord {
   std::vector<std::string> kinds;  // the method's mutation kinds, index of proposedPerKind
   std::vector<uint64_t> proposedPerKind, acceptedPerKind;
   int chains = 0, stuckChains = 0;  // chains with acceptance below the stuck threshold
+  // Markov chains: the relMSE an ideal chain on the luminance target would reach with this run's mutations
+  // (tools/eval/ideal_chain.h (I1), against the reference); relMSE / idealRelMSE is what the chain's
+  // correlation costs when the chains render the whole image. -1 for sample methods and unknown counts.
+  double idealRelMSE = -1;
   int width = 0;                    // of the film, to name a pixel in a flag (not in runs.csv; 0 when unknown)
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
 };
