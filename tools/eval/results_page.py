@@ -142,6 +142,10 @@ class Group:
         plan = [float(r["plan_seconds"]) for r in rows if r.get("plan_seconds")]
         self.plan_share = [p / s for p, s in zip(plan, self.seconds)] if plan else []
         self.flagged = [r for r in rows if r["flags"]]
+        # An ideal luminance-target chain's relMSE at each run's mutations (runs.csv ideal_relMSE; eval outputs
+        # written before it lack it): the mean relMSE over its mean, where every run has one.
+        ideal = [float(r["ideal_relMSE"]) for r in rows if r.get("ideal_relMSE")]
+        self.over_ideal = sum(self.rel) / sum(ideal) if ideal and len(ideal) == len(rows) else None
 
     def rel_ms(self):
         return mean_std(self.rel)
@@ -219,11 +223,13 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
     common = [b for b in budgets if all((m, b) in g for m in methods)]
     bd = 16.0 if 16.0 in common else (common[-1] if common else budgets[0])
     lines.append("At %g s: brightness (image mean's relative error against the reference) per run, work, "
-                 "throughput (wall time incl. bootstrap), bootstrap share of the job, flagged runs." % bd)
+                 "throughput (wall time incl. bootstrap), bootstrap share of the job, the chains' relMSE over an "
+                 "ideal chain's at their mutations (docs/CHAINS.md, \"How far the chains are from an ideal "
+                 "chain\"), flagged runs." % bd)
     lines.append("")
     lines.append("| method | brightness mean over runs | worst run | per run | work/px | samples or mutations/s "
-                 "| bootstrap share | flagged |")
-    lines.append("|---|---|---|---|---|---|---|---|")
+                 "| bootstrap share | over ideal | flagged |")
+    lines.append("|---|---|---|---|---|---|---|---|---|")
     for m in methods:
         if (m, bd) not in g:
             continue
@@ -232,9 +238,10 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
         worst = max(x.mean_err, key=abs)
         share = "%.1f%%" % (100 * max(x.plan_share)) if x.plan_share and is_chain(m) else "-"
         flags = "; ".join(sorted({f for r in x.flagged for f in r["flags"].split(";")}))
-        lines.append("| %s | %s | %s | %s | %.0f | %.3g M | %s | %d/%d %s |" % (
+        over = "%.2gx" % x.over_ideal if x.over_ideal is not None else "-"
+        lines.append("| %s | %s | %s | %s | %.0f | %.3g M | %s | %s | %d/%d %s |" % (
             m, pct(mu), pct(worst), ", ".join("%+.2f" % (100 * e) for e in x.mean_err), mean_std(x.work)[0],
-            x.throughput() / 1e6, share, len(x.flagged), len(x.rows), flags))
+            x.throughput() / 1e6, share, over, len(x.flagged), len(x.rows), flags))
     lines.append("")
     lines += kinds_lines(kinds, bd)
     # Which method to pick: the lowest mean relMSE at the detail budget among methods without flagged runs.
