@@ -107,6 +107,11 @@ TEST(IdealChain, UnvisitedLitPixelIsInfiniteAndBadInputIsRefused) {
   EXPECT_THROW(idealChainRelMse(img, {1, -1, 1}, 10), std::invalid_argument);
   EXPECT_THROW(idealChainRelMse(img, {1, 1, 1}, 0), std::invalid_argument);
   EXPECT_THROW(idealChainRelMse({}, {}, 10), std::invalid_argument);
+  // The harness's figure is -1, not an exception, where there is nothing to compare with.
+  EXPECT_EQ(idealLuminanceChainRelMse(std::vector<Color>(4, Color(0.0f)), 100), -1);
+  EXPECT_EQ(idealLuminanceChainRelMse(img, 0), -1);
+  EXPECT_EQ(idealLuminanceChainRelMse({Color(1.0f), Color(-1.0f, 0.0f, 0.0f)}, 10), -1);  // lit, zero luminance
+  EXPECT_DOUBLE_EQ(idealLuminanceChainRelMse(img, 10), idealChainBounds(img, 10).luminance);
 }
 
 }  // namespace

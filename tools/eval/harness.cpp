@@ -271,7 +271,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
         rec.acceptance = p > 0 ? double(a) / double(p) : -1;  // -1: not reported (farm runs)
         rec.chains = out.chains;
         rec.stuckChains = out.stuckChains;
-        if (out.samples > 0) rec.idealRelMSE = idealChainBounds(ref.image, double(out.samples), cfg.eps).luminance;
+        rec.idealRelMSE = idealLuminanceChainRelMse(ref.image, double(out.samples), cfg.eps);
       }
       logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}{}",
                                es.name, ms.label, budget, run, rec.seconds, rec.work, rec.metrics.relMSE,

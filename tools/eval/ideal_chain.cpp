@@ -58,4 +58,14 @@ IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mu
   return r;
 }
 
+double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps) {
+  if (!(mutations > 0) || reference.empty()) return -1;
+  std::vector<double> lum(reference.size());
+  double total = 0;
+  for (size_t j = 0; j < reference.size(); ++j) total += lum[j] = std::fmax(0.0, double(luminance(reference[j])));
+  if (!(total > 0) || !std::isfinite(total)) return -1;
+  const double r = idealChainRelMse(reference, lum, mutations, eps);
+  return std::isfinite(r) ? r : -1;
+}
+
 }  // namespace mlt::eval

@@ -36,4 +36,8 @@ struct IdealChainBounds {
 };
 IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mutations, double eps = 1e-2);
 
+// The harness's figure per chain run: bounds.luminance, or -1 where it is not a number to compare with (no
+// mutations, a reference without light, a lit pixel of zero luminance).
+double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps = 1e-2);
+
 }  // namespace mlt::eval
