@@ -17,6 +17,13 @@ double pixelWeight(const Color& I, double eps) {
   return a / 3;
 }
 
+// c_j = L_j, the luminance target (negative luminance, which no renderer here produces, counts as 0).
+std::vector<double> luminanceTarget(const std::vector<Color>& reference) {
+  std::vector<double> lum(reference.size());
+  for (size_t j = 0; j < reference.size(); ++j) lum[j] = std::fmax(0.0, double(luminance(reference[j])));
+  return lum;
+}
+
 }  // namespace
 
 double idealChainRelMse(const std::vector<Color>& reference, const std::vector<double>& c, double mutations,
@@ -46,13 +53,10 @@ double idealChainRelMse(const std::vector<Color>& reference, const std::vector<d
 }
 
 IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mutations, double eps) {
-  std::vector<double> lum(reference.size()), uniform(reference.size(), 1.0), best(reference.size());
-  for (size_t j = 0; j < reference.size(); ++j) {
-    lum[j] = std::fmax(0.0, double(luminance(reference[j])));
-    best[j] = std::sqrt(pixelWeight(reference[j], eps));
-  }
+  std::vector<double> uniform(reference.size(), 1.0), best(reference.size());
+  for (size_t j = 0; j < reference.size(); ++j) best[j] = std::sqrt(pixelWeight(reference[j], eps));
   IdealChainBounds r;
-  r.luminance = idealChainRelMse(reference, lum, mutations, eps);
+  r.luminance = idealChainRelMse(reference, luminanceTarget(reference), mutations, eps);
   r.uniform = idealChainRelMse(reference, uniform, mutations, eps);
   r.best = idealChainRelMse(reference, best, mutations, eps);
   return r;
@@ -60,9 +64,9 @@ IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mu
 
 double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps) {
   if (!(mutations > 0) || reference.empty()) return -1;
-  std::vector<double> lum(reference.size());
+  const std::vector<double> lum = luminanceTarget(reference);
   double total = 0;
-  for (size_t j = 0; j < reference.size(); ++j) total += lum[j] = std::fmax(0.0, double(luminance(reference[j])));
+  for (double l : lum) total += l;
   if (!(total > 0) || !std::isfinite(total)) return -1;
   const double r = idealChainRelMse(reference, lum, mutations, eps);
   return std::isfinite(r) ? r : -1;
