@@ -438,11 +438,18 @@ TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
       // (2.7-3.8x when this was written).
       EXPECT_GT(r.idealRelMSE, 0);
       EXPECT_LT(r.idealRelMSE, r.metrics.relMSE);
+      double idealSum = 0;
+      for (double v : r.bandIdeal) idealSum += v;
+      EXPECT_NEAR(idealSum, r.idealRelMSE, 1e-9 * r.idealRelMSE);  // the bands split (I1)
     } else {
       EXPECT_FALSE(r.markovChain);
       EXPECT_LT(r.idealRelMSE, 0);
       EXPECT_EQ(r.work, r.budget);  // equal samples: spp = budget
+      for (double v : r.bandIdeal) EXPECT_EQ(v, -1);
     }
+    double bandSum = 0;
+    for (double v : r.bandRelMSE) bandSum += v;
+    EXPECT_NEAR(bandSum, r.metrics.relMSE, 1e-9 * r.metrics.relMSE) << r.method << " run " << r.run;  // (B1)
   }
   // The reference's own noise was estimated and is small next to the injected bias.
   EXPECT_EQ(result.refs[0].noise.parts, 4);
@@ -486,6 +493,19 @@ TEST(EvalEndToEnd, QuickModeFlagsBiasedMethodAndOutlierRun) {
   summary << summaryFile.rdbuf();
   EXPECT_NE(summary.str().find("**pt-biased** fails: biased"), std::string::npos) << summary.str();
   EXPECT_NE(summary.str().find("**pt-outlier** fails: unstable"), std::string::npos);
+  EXPECT_NE(summary.str().find("### Where the error is"), std::string::npos);
+  EXPECT_NE(summary.str().find("| brightest 1% |"), std::string::npos);
+  // bands.csv: one row per run and band, the header first, every pssmlt row with its ideal.
+  std::ifstream bandsCsv(out + "/bands.csv");
+  std::getline(bandsCsv, line);
+  EXPECT_EQ(line, "scene,method,budget,run,band,rel_mse,ideal_rel_mse");
+  size_t bandRows = 0;
+  while (std::getline(bandsCsv, line)) {
+    ++bandRows;
+    const bool chain = line.find(",pssmlt,") != std::string::npos;
+    EXPECT_EQ(line.back() != ',', chain) << line;
+  }
+  EXPECT_EQ(bandRows, result.runs.size() * size_t(kBands));
   EXPECT_TRUE(std::filesystem::exists(out + "/maps/furnace_pt_error.png"));
   EXPECT_TRUE(std::filesystem::exists(out + "/maps/furnace_reference.png"));
 }

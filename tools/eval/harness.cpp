@@ -17,6 +17,7 @@
 #include "common/io/png_io.h"
 #include "common/render/render_scene.h"
 #include "tools/eval/error_map.h"
+#include "tools/eval/bands.h"
 #include "tools/eval/ideal_chain.h"
 #include "tools/eval/job_runner.h"
 #include "tools/eval/report.h"
@@ -226,6 +227,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
   }
 
   std::vector<std::pair<double, std::vector<Color>>> largestImages;  // (relMSE, image) at the largest budget
+  const std::vector<int> bands = brightnessBands(ref.image);
   for (int bi = 0; bi < int(cfg.budgets.size()); ++bi) {
     const double budget = cfg.budgets[bi];
     for (int run = 0; run < cfg.runs; ++run) {
@@ -259,6 +261,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
       rec.work = isMarkovChainMethod(ms.method) ? rs.mutationsPerPixel : double(rs.spp);
       rec.samples = out.samples;
       rec.metrics = computeMetrics(out.image, ref.image, cfg.eps);
+      rec.bandRelMSE = bandRelMse(out.image, ref.image, bands, cfg.eps);
       rec.width = ref.info.width;
       rec.markovChain = isMarkovChainMethod(ms.method);
       if (rec.markovChain) {
@@ -272,6 +275,7 @@ void evalMethod(const EvalConfig& cfg, const EvalScene& es, const RenderScene& s
         rec.chains = out.chains;
         rec.stuckChains = out.stuckChains;
         rec.idealRelMSE = idealLuminanceChainRelMse(ref.image, double(out.samples), cfg.eps);
+        rec.bandIdeal = idealLuminanceChainBands(ref.image, bands, double(out.samples), cfg.eps);
       }
       logLine(cfg, fmt::format("{} {} budget {} run {}: {:.2f} s, work {:.3g}, relMSE {:.4g}, mean {:+.2f}%{}{}",
                                es.name, ms.label, budget, run, rec.seconds, rec.work, rec.metrics.relMSE,
@@ -317,6 +321,10 @@ void writeEvalOutputs(const EvalConfig& cfg, EvalResult& result) {
   {
     auto os = open("kinds.csv");
     writeKindsCsv(os, result.runs);
+  }
+  {
+    auto os = open("bands.csv");
+    writeBandsCsv(os, result.runs);
   }
   {
     auto os = open("refs.csv");

@@ -26,8 +26,8 @@ std::vector<double> luminanceTarget(const std::vector<Color>& reference) {
 
 }  // namespace
 
-double idealChainRelMse(const std::vector<Color>& reference, const std::vector<double>& c, double mutations,
-                        double eps) {
+std::vector<double> idealChainTerms(const std::vector<Color>& reference, const std::vector<double>& c,
+                                    double mutations, double eps) {
   if (reference.empty()) throw std::invalid_argument("idealChainRelMse: empty reference");
   if (c.size() != reference.size())
     throw std::invalid_argument("idealChainRelMse: " + std::to_string(c.size()) + " target values for " +
@@ -42,13 +42,19 @@ double idealChainRelMse(const std::vector<Color>& reference, const std::vector<d
     C += c[j];
   }
   if (!(C > 0)) throw std::invalid_argument("idealChainRelMse: the target is zero everywhere");
-  double sum = 0;
+  std::vector<double> terms(c.size(), 0.0);
   for (size_t j = 0; j < c.size(); ++j) {
     const double a = pixelWeight(reference[j], eps);
     if (a == 0) continue;
-    if (c[j] == 0) return std::numeric_limits<double>::infinity();
-    sum += a * C / (mutations * c[j]);
+    terms[j] = c[j] == 0 ? std::numeric_limits<double>::infinity() : a * C / (mutations * c[j]);
   }
+  return terms;
+}
+
+double idealChainRelMse(const std::vector<Color>& reference, const std::vector<double>& c, double mutations,
+                        double eps) {
+  double sum = 0;
+  for (double t : idealChainTerms(reference, c, mutations, eps)) sum += t;  // +inf stays +inf
   return sum / double(reference.size());
 }
 
@@ -62,14 +68,24 @@ IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mu
   return r;
 }
 
-double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps) {
-  if (!(mutations > 0) || reference.empty()) return -1;
+std::vector<double> idealLuminanceChainTerms(const std::vector<Color>& reference, double mutations, double eps) {
+  if (!(mutations > 0) || reference.empty()) return {};
   const std::vector<double> lum = luminanceTarget(reference);
   double total = 0;
   for (double l : lum) total += l;
-  if (!(total > 0) || !std::isfinite(total)) return -1;
-  const double r = idealChainRelMse(reference, lum, mutations, eps);
-  return std::isfinite(r) ? r : -1;
+  if (!(total > 0) || !std::isfinite(total)) return {};
+  std::vector<double> terms = idealChainTerms(reference, lum, mutations, eps);
+  for (double t : terms)
+    if (!std::isfinite(t)) return {};
+  return terms;
+}
+
+double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps) {
+  const std::vector<double> terms = idealLuminanceChainTerms(reference, mutations, eps);
+  if (terms.empty()) return -1;
+  double sum = 0;
+  for (double t : terms) sum += t;
+  return sum / double(reference.size());
 }
 
 }  // namespace mlt::eval

@@ -28,6 +28,10 @@ namespace mlt::eval {
 // result +infinity; black pixels (a_j = 0) cost nothing.
 double idealChainRelMse(const std::vector<Color>& reference, const std::vector<double>& c, double mutations,
                         double eps = 1e-2);
+// The terms of (I1) per pixel, a_j C / (N c_j) (0 for a black pixel, +infinity for a lit pixel the target
+// never visits): idealChainRelMse is their mean. Same checks as idealChainRelMse.
+std::vector<double> idealChainTerms(const std::vector<Color>& reference, const std::vector<double>& c,
+                                    double mutations, double eps = 1e-2);
 
 struct IdealChainBounds {
   double luminance = 0;  // c = the pixel's luminance
@@ -39,5 +43,8 @@ IdealChainBounds idealChainBounds(const std::vector<Color>& reference, double mu
 // The harness's figure per chain run: bounds.luminance, or -1 where it is not a number to compare with (no
 // mutations, a reference without light, a lit pixel of zero luminance).
 double idealLuminanceChainRelMse(const std::vector<Color>& reference, double mutations, double eps = 1e-2);
+// Its per-pixel terms (idealChainTerms of the luminance target); empty where it is -1.
+std::vector<double> idealLuminanceChainTerms(const std::vector<Color>& reference, double mutations,
+                                             double eps = 1e-2);
 
 }  // namespace mlt::eval

@@ -70,6 +70,28 @@ GroupStats groupStats(const std::vector<const RunRecord*>& g) {
   return s;
 }
 
+// Band means over a group's runs; ideal[b] is -1 unless every run has it.
+struct BandStats {
+  BandValues relMSE{}, ideal{-1, -1, -1, -1};
+  double total = 0;
+};
+
+BandStats bandStats(const std::vector<const RunRecord*>& g) {
+  BandStats s;
+  if (g.empty()) return s;
+  BandValues ideal{};
+  bool allIdeal = true;
+  for (const RunRecord* r : g)
+    for (size_t b = 0; b < size_t(kBands); ++b) {
+      s.relMSE[b] += r->bandRelMSE[b] / double(g.size());
+      if (r->bandIdeal[b] >= 0) ideal[b] += r->bandIdeal[b] / double(g.size());
+      else allIdeal = false;
+    }
+  if (allIdeal) s.ideal = ideal;
+  for (double v : s.relMSE) s.total += v;
+  return s;
+}
+
 std::string budgetText(const EvalConfig& cfg) {
   std::string s;
   for (double b : cfg.budgets) s += (s.empty() ? "" : ", ") + fmt::format("{:g}", b);
@@ -185,6 +207,30 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
     }
     os << "\n";
 
+    // Where the error is, by the reference's brightness.
+    os << "### Where the error is\n\n";
+    os << "The mean relMSE at the largest budget split by the reference's brightness (tools/eval/bands.h: pixels "
+          "ranked by reference luminance; the bands add up to the relMSE), with each band's share of it and, for "
+          "Markov chains, the band over the same band of the ideal chain's (where the correlation costs most).\n\n";
+    os << "| method |";
+    for (int b = 0; b < kBands; ++b) os << " " << bandName(b) << " |";
+    os << "\n|---|";
+    for (int b = 0; b < kBands; ++b) os << "---|";
+    os << "\n";
+    for (const auto& m : sorted) {
+      auto it = groups.find({m, last});
+      if (it == groups.end()) continue;
+      const BandStats bs = bandStats(it->second);
+      os << "| " << m << " |";
+      for (int b = 0; b < kBands; ++b) {
+        const size_t i = size_t(b);
+        os << fmt::format(" {:.2g} ({:.0f}%{}) |", bs.relMSE[i], bs.total > 0 ? 100 * bs.relMSE[i] / bs.total : 0.0,
+                          bs.ideal[i] > 0 ? fmt::format(", {:.2g}x", bs.relMSE[i] / bs.ideal[i]) : std::string());
+      }
+      os << "\n";
+    }
+    os << "\n";
+
     // Stability.
     os << "### Stability\n\n";
     chart("spread_" + sn + ".png", "run-to-run spread, " + scene);
@@ -226,7 +272,7 @@ void writeSummary(std::ostream& os, const EvalConfig& cfg, const EvalResult& res
       os << "![](maps/" << sn << "_reference.png) |\n\n";
     }
   }
-  os << "Tables: `runs.csv` (every run), `acceptance.csv` (per path length), `refs.csv` (references).\n";
+  os << "Tables: `runs.csv` (every run), `bands.csv` (every run's error by brightness band), `acceptance.csv` (per path length), `refs.csv` (references).\n";
 }
 
 }  // namespace mlt::eval

@@ -109,6 +109,16 @@ void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs) {
                       r.cached ? 1 : 0);
 }
 
+void writeBandsCsv(std::ostream& os, const std::vector<RunRecord>& runs) {
+  os << "scene,method,budget,run,band,rel_mse,ideal_rel_mse\n";
+  for (const RunRecord& r : runs)
+    for (int b = 0; b < kBands; ++b) {
+      const double ideal = r.bandIdeal[size_t(b)];
+      os << fmt::format("{},{},{:g},{},{},{:.9g},{}\n", csvQuote(r.scene), csvQuote(r.method), r.budget, r.run,
+                        csvQuote(bandName(b)), r.bandRelMSE[size_t(b)], ideal >= 0 ? fmt::format("{:.9g}", ideal) : "");
+    }
+}
+
 std::vector<RunRecord> readRunsCsv(std::istream& is) {
   std::string line;
   if (!std::getline(is, line) || (line != kRunsHeader && line != kRunsHeader22 && line != kRunsHeader20))

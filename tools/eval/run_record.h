@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/eval/bands.h"
 #include "tools/eval/metrics.h"
 
 namespace mlt::eval {
@@ -36,6 +37,10 @@ struct RunRecord {
   // (tools/eval/ideal_chain.h (I1), against the reference); relMSE / idealRelMSE is what the chain's
   // correlation costs when the chains render the whole image. -1 for sample methods and unknown counts.
   double idealRelMSE = -1;
+  // The relMSE split by the reference's brightness (tools/eval/bands.h (B1); the bands add up to relMSE) and
+  // the same split of idealRelMSE (-1 entries where idealRelMSE is -1). In bands.csv, not in runs.csv.
+  BandValues bandRelMSE{};
+  BandValues bandIdeal{-1, -1, -1, -1};
   int width = 0;                    // of the film, to name a pixel in a flag (not in runs.csv; 0 when unknown)
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
 };
@@ -53,6 +58,8 @@ void writeRunsCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 void writeAcceptanceCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 void writeKindsCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 void writeRefsCsv(std::ostream& os, const std::vector<ReferenceInfo>& refs);
+// One row per run and band: scene,method,budget,run,band,rel_mse,ideal_rel_mse (empty where not known).
+void writeBandsCsv(std::ostream& os, const std::vector<RunRecord>& runs);
 // Reads what writeRunsCsv wrote (the per-length acceptance is not in runs.csv). Throws
 // std::runtime_error naming the line on malformed input.
 std::vector<RunRecord> readRunsCsv(std::istream& is);
