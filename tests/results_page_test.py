@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks tools/eval/results_page.py on synthetic `mltfarm eval` outputs: two calls (every method at 4 and
 16 s; two methods at 64 s) are pooled with budget indices renumbered by value, and the page's target
-checks follow the numbers, acceptance per mutation kind is pooled over runs (a method that misses the brightness target is marked "no", the mmlt/bdpt ratio
+checks follow the numbers, acceptance per mutation kind and the error per brightness band are pooled over runs (a method that misses the brightness target is marked "no", the mmlt/bdpt ratio
 is the ratio of the means, the hard-scene ratio picks the best chain method, the references' noise is checked
 against the best method's error)."""
 import csv
@@ -65,6 +65,16 @@ def main():
         for run in range(3):
             f.write("caustic-mirror,mmlt,local,1,16,%d,large,100,10\n" % run)
             f.write("caustic-mirror,mmlt,local,1,16,%d,small,600,300\n" % run)
+    # Error by brightness band of the caustic-mirror runs at 16 s: mmlt's with its ideal chain's bands (its
+    # bands sum to its relMSE, 0.0375; over ideal 2.5x, 3x, 6x, 10x), pt's without.
+    with open(os.path.join(tmp, "a-short", "bands.csv"), "w") as f:
+        f.write("scene,method,budget,run,band,rel_mse,ideal_rel_mse\n")
+        names = ("darkest 50%", "50-90%", "90-99%", "brightest 1%")
+        for run in range(3):
+            for n, rel, ideal in zip(names, (0.02, 0.012, 0.003, 0.0025), (0.008, 0.004, 0.0005, 0.00025)):
+                f.write("caustic-mirror,mmlt,16,%d,%s,%g,%g\n" % (run, n, rel, ideal))
+            for n, rel in zip(names, (0.05, 0.02, 0.004, 0.001)):
+                f.write("caustic-mirror,pt,16,%d,%s,%g,\n" % (run, n, rel))
     write_eval_dir(os.path.join(tmp, "a-long"), long_, ["cornell-box"])
     out, page = os.path.join(tmp, "pooled"), os.path.join(tmp, "PAGE.md")
     subprocess.run([sys.executable, SCRIPT, "--out", out, "--page", page, os.path.join(tmp, "a-short"),
@@ -104,6 +114,14 @@ def main():
     assert any(line.startswith("| pssmlt | ") and "| - |" in line for line in detail), detail
     with open(os.path.join(out, "kinds.csv"), newline="") as f:
         assert len(list(csv.DictReader(f))) == 6
+    # Where the error is (bands.csv pooled): shares of each method's error, chains over their ideal per band;
+    # the cornell-box section, whose runs have no bands, has no such table.
+    assert "| method | darkest 50% | 50-90% | 90-99% | brightest 1% |" in mirror, mirror
+    assert "| mmlt | 0.02 (53%, 2.5x) | 0.012 (32%, 3x) | 3.00e-03 (8%, 6x) | 2.50e-03 (7%, 10x) |" in mirror, mirror
+    assert "| pt | 0.05 (67%) | 0.02 (27%) | 4.00e-03 (5%) | 1.00e-03 (1%) |" in mirror, mirror
+    assert "Where the error is" not in text[text.index("## cornell-box"):], text
+    with open(os.path.join(out, "bands.csv"), newline="") as f:
+        assert len(list(csv.DictReader(f))) == 24
     for png in ("error_time_cornell-box.png", "spread_caustic-mirror.png"):
         assert os.path.exists(os.path.join(out, png)), png
     check_keep(tmp, out)
@@ -139,6 +157,8 @@ def check_keep(tmp, previous):
     assert set(refs) == {"caustic-mirror", "cornell-box"} and float(refs["caustic-mirror"]["relMSE_floor"]) == 1e-4
     with open(os.path.join(out, "kinds.csv"), newline="") as f:
         assert len([r for r in csv.DictReader(f) if r["method"] == "mmlt"]) == 6, "mmlt's kinds kept"
+    with open(os.path.join(out, "bands.csv"), newline="") as f:  # mmlt's bands kept, the rerun pt's dropped
+        assert sorted({r["method"] for r in csv.DictReader(f)}) == ["mmlt"], "bands of the kept rows only"
     text = open(page).read()
     assert "- 16 s: mmlt / bdpt relMSE = 1.50 (not met)" in text, text  # cornell-box, kept
     # The new reference (floor 1e-4) against the best at the scene's largest budget: 1e-4 / (1e-3 - 1e-4).

@@ -4,7 +4,7 @@
 usage: /usr/bin/python3 tools/eval/results_page.py --out DIR --page PAGE.md [--header FILE] [--keep OLDDIR] EVALDIR...
 
 Each EVALDIR holds what one `mltfarm eval` call wrote (runs.csv, acceptance.csv, refs.csv,
-calibration.csv, kinds.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
+calibration.csv, kinds.csv, bands.csv). Different calls may cover different methods or budgets of the same scene (e.g. every
 method at 4 and 16 s, the leading methods at 64 s); their rows are pooled, budget indices are renumbered
 by budget value, DIR gets the pooled tables and the charts (tools/eval/charts.py), and PAGE.md gets, per
 scene, the reference's own noise, relMSE per method and budget, brightness per run, throughput, bootstrap
@@ -69,7 +69,7 @@ def pool(dirs, out, keep=None):
     keep: a directory of pooled tables (a previous page's docs/results) whose rows are kept for every
     (scene, method, budget) that no eval directory has: a page with a few scenes rerun, or a budget added to
     one, and the rest as it was. A scene's reference comes from the eval directories when they have one."""
-    runs, acc, refs, cal, kinds = [], [], OrderedDict(), [], []
+    runs, acc, refs, cal, kinds, bands = [], [], OrderedDict(), [], [], []
     fields = {}
     eval_runs = {}  # each eval directory's runs.csv, read once
     for d in dirs:
@@ -103,6 +103,11 @@ def pool(dirs, out, keep=None):
         if f:
             fields["kinds"] = f
         kinds += k
+        bb, f = read_csv(os.path.join(d, "bands.csv"))  # per run and brightness band; older outputs have none
+        bb = kept(bb)
+        if f:
+            fields["bands"] = f
+        bands += bb
         rr, f = read_csv(os.path.join(d, "refs.csv"))
         fields["refs"] = f
         for x in rr:  # the eval directories' references come first and win
@@ -126,7 +131,9 @@ def pool(dirs, out, keep=None):
         write_csv(os.path.join(out, "calibration.csv"), cal, fields["cal"])
     if "kinds" in fields:
         write_csv(os.path.join(out, "kinds.csv"), kinds, fields["kinds"])
-    return runs, refs, budgets, kinds
+    if "bands" in fields:
+        write_csv(os.path.join(out, "bands.csv"), bands, fields["bands"])
+    return runs, refs, budgets, kinds, bands
 
 
 class Group:
@@ -178,7 +185,39 @@ def kinds_lines(kinds, bd):
     return lines + [""]
 
 
-def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
+def bands_lines(bands, bd, methods):
+    """The error split by the reference's brightness at budget bd (bands.csv, tools/eval/bands.h): per method
+    the mean over runs of each band's relMSE, its share of the method's error and, for chains whose every run
+    has it, the band over the ideal chain's band. Methods without bands.csv rows are left out."""
+    per = OrderedDict()  # method -> band -> [(rel, ideal or None)]
+    for r in bands:
+        if float(r["budget"]) != bd:
+            continue
+        per.setdefault(r["method"], OrderedDict()).setdefault(r["band"], []).append(
+            (float(r["rel_mse"]), float(r["ideal_rel_mse"]) if r["ideal_rel_mse"] else None))
+    shown = [m for m in methods if m in per]
+    if not shown:
+        return []
+    names = list(per[shown[0]].keys())
+    lines = ["Where the error is at %g s: the mean relMSE split by the reference's brightness (pixels ranked by "
+             "its luminance; the bands add up to the relMSE), each band's share, and for chains the band over "
+             "an ideal chain's (docs/CHAINS.md, \"Where the error is, in the harness\"):" % bd, "",
+             "| method | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    for m in shown:
+        means = [mean_std([v for v, _ in per[m].get(n, [])])[0] if per[m].get(n) else 0.0 for n in names]
+        total = sum(means) or 1.0
+        cells = []
+        for n, mu in zip(names, means):
+            ideals = [i for _, i in per[m].get(n, [])]
+            over = ""
+            if ideals and all(i is not None and i > 0 for i in ideals):
+                over = ", %.2gx" % (mu / mean_std(ideals)[0])
+            cells.append("%s (%.0f%%%s)" % (fmt_e(mu), 100 * mu / total, over))
+        lines.append("| %s | %s |" % (m, " | ".join(cells)))
+    return lines + [""]
+
+
+def scene_section(scene, runs, ref, budgets, out_rel, kinds=(), bands=()):
     lines = ["## %s" % scene, ""]
     groups = OrderedDict()
     for r in runs:
@@ -244,6 +283,7 @@ def scene_section(scene, runs, ref, budgets, out_rel, kinds=()):
             x.throughput() / 1e6, share, over, len(x.flagged), len(x.rows), flags))
     lines.append("")
     lines += kinds_lines(kinds, bd)
+    lines += bands_lines(bands, bd, methods)
     # Which method to pick: the lowest mean relMSE at the detail budget among methods without flagged runs.
     clean = [(g[(m, bd)].rel_ms()[0], m) for m in methods if (m, bd) in g and not g[(m, bd)].flagged]
     if clean:
@@ -364,7 +404,7 @@ def main():
     a = ap.parse_args()
     if a.keep and os.path.realpath(a.keep) == os.path.realpath(a.out):
         sys.exit("results_page.py: --keep %s is --out: copy it first (the pooled tables are rewritten)" % a.keep)
-    runs, refs, budgets, kinds = pool(a.dirs, a.out, a.keep)
+    runs, refs, budgets, kinds, bands = pool(a.dirs, a.out, a.keep)
     subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "charts.py"), a.out], check=True)
     out_rel = os.path.relpath(a.out, os.path.dirname(os.path.abspath(a.page)))
     lines = []
@@ -376,7 +416,8 @@ def main():
     body = []
     for scene in scenes:
         sec, g, methods = scene_section(scene, [r for r in runs if r["scene"] == scene], refs.get(scene),
-                                        budgets, out_rel, [k for k in kinds if k["scene"] == scene])
+                                        budgets, out_rel, [k for k in kinds if k["scene"] == scene],
+                                        [x for x in bands if x["scene"] == scene])
         all_groups[scene] = (g, methods)
         body += sec
     lines += targets_section(all_groups, refs, budgets) + body
