@@ -128,7 +128,7 @@ fi
   echo "References: ${REF_METHOD}${REF_METHODS:+ (per scene: ${REF_METHODS})} in 4 independent parts (their spread gives the reference's own noise floor and"
   echo "brightness error, reported per scene). relMSE = mean over pixels and channels of"
   echo "(x - r)^2 / (r^2 + 0.01); brightness = relative error of the image mean. Raw data:"
-  echo "[runs.csv](results/runs.csv), [acceptance.csv](results/acceptance.csv), [refs.csv](results/refs.csv)."
+  echo "[runs.csv](results/runs.csv), [acceptance.csv](results/acceptance.csv), [refs.csv](results/refs.csv), [bands.csv](results/bands.csv)."
   echo "Flags (outlier, stuck chain, brightness) come from \`tools/eval/stability.h\`."
 } > "$WORK/header.md"
 if [[ -n "${HEADER:-}" ]]; then cp "$HEADER" "$WORK/header.md"; fi
