@@ -10,6 +10,16 @@
 
 namespace mlt::eval {
 
+namespace {
+// bands[j], checked to name a band (std::invalid_argument naming the caller and the pixel otherwise).
+size_t bandAt(const std::vector<int>& bands, size_t j, const char* who) {
+  const int b = bands[j];
+  if (b < 0 || b >= kBands)
+    throw std::invalid_argument(std::string(who) + ": band " + std::to_string(b) + " at pixel " + std::to_string(j));
+  return size_t(b);
+}
+}  // namespace
+
 std::string bandName(int band) {
   switch (band) {
     case 0: return "darkest 50%";
@@ -52,12 +62,11 @@ BandValues bandRelMse(const std::vector<Color>& image, const std::vector<Color>&
   BandValues sum{};
   uint64_t n = 0;  // finite channel values: the denominator of computeMetrics' relMSE
   for (size_t j = 0; j < image.size(); ++j) {
-    const int b = bands[j];
-    if (b < 0 || b >= kBands) throw std::invalid_argument("bandRelMse: band " + std::to_string(b) + " at pixel " + std::to_string(j));
+    const size_t b = bandAt(bands, j, "bandRelMse");
     for (int c = 0; c < 3; ++c) {
       const double x = image[j][c], r = reference[j][c];
       if (!std::isfinite(x)) continue;
-      sum[size_t(b)] += (x - r) * (x - r) / (r * r + eps);
+      sum[b] += (x - r) * (x - r) / (r * r + eps);
       ++n;
     }
   }
@@ -70,17 +79,10 @@ BandValues idealLuminanceChainBands(const std::vector<Color>& reference, const s
   if (bands.size() != reference.size())
     throw std::invalid_argument("idealLuminanceChainBands: " + std::to_string(bands.size()) + " band entries for " +
                                 std::to_string(reference.size()) + " pixels");
-  BandValues out;
-  out.fill(-1.0);
   const std::vector<double> terms = idealLuminanceChainTerms(reference, mutations, eps);
-  if (terms.empty()) return out;
-  out.fill(0.0);
-  for (size_t j = 0; j < terms.size(); ++j) {
-    const int b = bands[j];
-    if (b < 0 || b >= kBands)
-      throw std::invalid_argument("idealLuminanceChainBands: band " + std::to_string(b) + " at pixel " + std::to_string(j));
-    out[size_t(b)] += terms[j];
-  }
+  if (terms.empty()) return kUnknownBands;
+  BandValues out{};
+  for (size_t j = 0; j < terms.size(); ++j) out[bandAt(bands, j, "idealLuminanceChainBands")] += terms[j];
   for (double& v : out) v /= double(reference.size());
   return out;
 }

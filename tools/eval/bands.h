@@ -25,6 +25,12 @@ constexpr std::array<double, kBands> kBandUpper = {0.5, 0.9, 0.99, 1.0};
 std::string bandName(int band);
 
 using BandValues = std::array<double, kBands>;
+// Every band unknown (-1): a run without an ideal chain's figure.
+inline constexpr BandValues kUnknownBands = [] {
+  BandValues v{};
+  v.fill(-1.0);
+  return v;
+}();
 
 // The band (0 .. kBands-1) of every pixel of `reference` (empty reference: std::invalid_argument).
 // Band b holds the pixels of rank [floor(q_{b-1} P), floor(q_b P)) in ascending luminance.

@@ -72,7 +72,7 @@ GroupStats groupStats(const std::vector<const RunRecord*>& g) {
 
 // Band means over a group's runs; ideal[b] is -1 unless every run has it.
 struct BandStats {
-  BandValues relMSE{}, ideal{-1, -1, -1, -1};
+  BandValues relMSE{}, ideal = kUnknownBands;
   double total = 0;
 };
 

@@ -40,7 +40,7 @@ struct RunRecord {
   // The relMSE split by the reference's brightness (tools/eval/bands.h (B1); the bands add up to relMSE) and
   // the same split of idealRelMSE (-1 entries where idealRelMSE is -1). In bands.csv, not in runs.csv.
   BandValues bandRelMSE{};
-  BandValues bandIdeal{-1, -1, -1, -1};
+  BandValues bandIdeal = kUnknownBands;
   int width = 0;                    // of the film, to name a pixel in a flag (not in runs.csv; 0 when unknown)
   std::vector<std::string> flags;   // filled by the stability analysis: "outlier", "stuck", "brightness"
 };
