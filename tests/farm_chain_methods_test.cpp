@@ -144,19 +144,20 @@ TEST(FarmChainMethods, RjmltOnTwoWorkersMatchesTheInProcessRenderAndCarriesItsMo
 }
 
 TEST(FarmChainMethods, VeachMltOnTwoWorkersMatchesTheInProcessRenderAndCarriesItsMoveStatistics) {
-  // Two scenes, so that each of the five moves has paths to work on: the Cornell box (all diffuse: the
+  // Two scenes, so that each of the six moves has paths to work on: the Cornell box (all diffuse: the
   // caustic perturbation applies, the multi-chain one does not) and the caustic scene (every camera ray
   // hits a mirror first: no D E end for the caustic perturbation, specular chains for the multi-chain one).
-  const std::vector<std::string> kinds = {"bidir", "lens", "caustic", "multichain", "lens-subpath"};
+  // The deep lens perturbation, off by default, is switched on.
+  const std::vector<std::string> kinds = {"bidir", "lens", "caustic", "multichain", "lens-subpath", "deep-lens"};
   std::map<std::string, double> proposedSomewhere;
   for (const std::string scene : {"cornell-box", "caustic-mirror"}) {
     const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/" + scene + ".xml",
                                       "--method veach-mlt --seed 7 --width 32 --height 32 --mutations-per-pixel 8 "
-                                      "--chains 24 --bootstrap 4000 --max-depth 5",
+                                      "--chains 24 --bootstrap 4000 --max-depth 5 --veach-deep-lens 1",
                                       "veach-" + scene);
     expectSameImageAndStatistics(r, "veach-mlt");
     const ExrImage& img = r.farm;
-    EXPECT_EQ(text(img, "mutationKinds"), "bidir,lens,caustic,multichain,lens-subpath");
+    EXPECT_EQ(text(img, "mutationKinds"), "bidir,lens,caustic,multichain,lens-subpath,deep-lens");
     const double mutations = number(img, "mutations");
     EXPECT_EQ(mutations, 32.0 * 32 * 8) << scene;
     double proposed = 0;

@@ -153,6 +153,7 @@ TEST(VeachChain, DiffuseBox) {
   EXPECT_LT(compare("diffuse, bidir + lens subpath", *scene, 5, only({veach::kBidir, veach::kLensSubpath}), 64, ref), kZ);
   EXPECT_LT(compare("diffuse, bidir + lens", *scene, 5, only({veach::kBidir, veach::kLens}), 64, ref), kZ);
   EXPECT_LT(compare("diffuse, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 64, ref), kZ);
+  EXPECT_LT(compare("diffuse, bidir + deep lens", *scene, 5, only({veach::kBidir, veach::kDeepLens}), 64, ref), kZ);
   // The comparison can fail: a symmetric T-ratio for the bidirectional mutation is detected.
   const double zWrong = test::maxZ(wrongStats(*scene, 5, 64), ref);
   std::printf("diffuse, bidir with T-ratio 1: max z %.2f\n", zWrong);
@@ -173,6 +174,7 @@ TEST(VeachChain, GlassAndMirrorSpheres) {
   const test::ImageStats ref = bdptStats(*scene, 5, 512);
   EXPECT_LT(compare("glass + mirror, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 96, ref), kZ);
   EXPECT_LT(compare("glass + mirror, all", *scene, 5, MutationSettings{}, 96, ref), kZ);
+  EXPECT_LT(compare("glass + mirror, bidir + deep lens", *scene, 5, only({veach::kBidir, veach::kDeepLens}), 96, ref), kZ);
   MutationSettings chainsOnly;  // no light-view pass: the chains carry the light seen directly and through glass
   chainsOnly.lightView = 0;
   EXPECT_LT(compare("glass + mirror, all, light views in the chains", *scene, 5, chainsOnly, 96, ref), kZ);
@@ -183,6 +185,7 @@ TEST(VeachChain, MirrorWall) {
   const test::ImageStats ref = bdptStats(*scene, 5, 512);
   EXPECT_LT(compare("mirror wall, bidir + multichain", *scene, 5, only({veach::kBidir, veach::kMultiChain}), 96, ref), kZ);
   EXPECT_LT(compare("mirror wall, all", *scene, 5, MutationSettings{}, 96, ref), kZ);
+  EXPECT_LT(compare("mirror wall, bidir + deep lens", *scene, 5, only({veach::kBidir, veach::kDeepLens}), 96, ref), kZ);
 }
 
 TEST(VeachChain, ThinLens) {
@@ -194,6 +197,7 @@ TEST(VeachChain, ThinLens) {
   const test::ImageStats ref = bdptStats(*scene, 4, 512);
   EXPECT_LT(compare("thin lens, bidir + lens", *scene, 4, only({veach::kBidir, veach::kLens}), 96, ref), kZ);
   EXPECT_LT(compare("thin lens, all", *scene, 4, MutationSettings{}, 96, ref), kZ);
+  EXPECT_LT(compare("thin lens, bidir + deep lens", *scene, 4, only({veach::kBidir, veach::kDeepLens}), 96, ref), kZ);
 }
 
 // Delta-position lights (path.h): the box lit by the point light alone, by the spot light alone, and the
@@ -209,6 +213,7 @@ TEST(VeachChain, PointLight) {
   const test::ImageStats ref = bdptStats(*scene, 5, 256);
   EXPECT_LT(compare("point light, bidir", *scene, 5, only({veach::kBidir}), 64, ref), kZ);
   EXPECT_LT(compare("point light, bidir + caustic", *scene, 5, only({veach::kBidir, veach::kCaustic}), 64, ref), kZ);
+  EXPECT_LT(compare("point light, bidir + deep lens", *scene, 5, only({veach::kBidir, veach::kDeepLens}), 64, ref), kZ);
   EXPECT_LT(compare("point light, all", *scene, 5, MutationSettings{}, 64, ref), kZ);
 }
 

@@ -291,6 +291,80 @@ TEST(VeachDensity, CausticPerturbation) {
   }
 }
 
+// The deep lens perturbation moves two vertices at once (stop n = 2 on x = L D D E: y_2 by the film step,
+// y_1 by the turned direction at y_2, connected to the kept light point), so its T is checked jointly:
+// the fraction of proposals with (y_2, y_1) in a bin pair R2 x R1 against the integral of T over R2 x R1
+// (uniform points in both bins). The smallest steps are raised (0.5 pixel, 0.01 radian) so that T's peak
+// where a step is near zero stays within the points' reach; the bin pairs holding that peak (y_2's bin
+// around x_2) are not compared. n = 2 is the only stop on such a path (P(n = 2 | x) = 1). T without the
+// cosine at the turned direction's vertex is shown to fail.
+TEST(VeachDensity, DeepLensPerturbationJointly) {
+  const auto scene = RenderScene::build(test::smallCornellBox(32, 32));
+  const PathSpace space(*scene, 5);
+  const auto move = veach::makeDeepLensPerturbation(space, 0.5, 3.0, 0.01, 0.1);
+  // x_2 on the back wall, x_1 on the floor, both away from edges.
+  const Path x = findPath(space, 3, [](const Path& p) {
+    const Vec3 a = p.v[2].p, b = p.v[1].p;
+    return onPlane(a, 2, 1) && std::fabs(a.x) < 0.4f && std::fabs(a.y) < 0.4f && onPlane(b, 1, -1) &&
+           std::fabs(b.x) < 0.5f && std::fabs(b.z) < 0.5f;
+  });
+  const std::vector<Bin> b2 = binsAround(space, x.v[2].p, 2, 0.3f, 5), b1 = binsAround(space, x.v[1].p, 1, 0.3f, 5);
+  const auto binOf = [](const std::vector<Bin>& bins, const Vec3& p) {
+    for (size_t i = 0; i < bins.size(); ++i)
+      if (bins[i].contains(p)) return int(i);
+    return -1;
+  };
+  constexpr uint64_t N = 1000000;
+  std::vector<uint64_t> count(b2.size() * b1.size(), 0);
+  Pcg32 rng(21, 1);
+  Path y;
+  int irreversible = 0;
+  for (uint64_t n = 0; n < N; ++n) {
+    if (!move->propose(x, rng, y) || luminance(space.f(y, nullptr)) <= 0) continue;
+    if (!(move->density(x, y) > 0 && move->density(y, x) > 0)) ++irreversible;
+    EXPECT_TRUE(y.v[0].samePoint(x.v[0]));  // the light point is kept
+    const int i2 = binOf(b2, y.v[2].p), i1 = binOf(b1, y.v[1].p);
+    if (i2 >= 0 && i1 >= 0) ++count[size_t(i2) * b1.size() + size_t(i1)];
+  }
+  EXPECT_EQ(irreversible, 0);
+  const auto check = [&](bool withCosine) {
+    Pcg32 pts(21, 2);
+    constexpr int M = 400;
+    double maxZ = 0;
+    int tested = 0;
+    for (size_t i2 = 0; i2 < b2.size(); ++i2) {
+      if (b2[i2].contains(x.v[2].p)) continue;  // the film step's peak
+      for (size_t i1 = 0; i1 < b1.size(); ++i1) {
+        double sum = 0, sq = 0;
+        for (int m = 0; m < M; ++m) {
+          Path yz = x;
+          yz.v[2] = b2[i2].proto;
+          yz.v[2].p = b2[i2].origin + b2[i2].u * pts.uniform() + b2[i2].v * pts.uniform();
+          yz.v[1] = b1[i1].proto;
+          yz.v[1].p = b1[i1].origin + b1[i1].u * pts.uniform() + b1[i1].v * pts.uniform();
+          double T = luminance(space.f(yz, nullptr)) > 0 ? move->density(x, yz) : 0.0;
+          if (!withCosine && T > 0) T /= PathSpace::cosAt(yz.v[1], normalize(yz.v[1].p - yz.v[2].p));
+          sum += T;
+          sq += T * T;
+        }
+        const double A = b2[i2].area() * b1[i1].area(), mean = sum / M;
+        const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
+        const double got = double(count[i2 * b1.size() + i1]) / double(N);
+        if (std::max(got, expect) * double(N) < 30) continue;
+        const double seGot = std::sqrt(std::max(got, expect) / double(N));
+        ++tested;
+        maxZ = std::max(maxZ, std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect));
+      }
+    }
+    std::printf("deep lens perturbation%s: %d bin pairs tested, max z %.2f\n", withCosine ? "" : " (T without the cosine)",
+                tested, maxZ);
+    EXPECT_GE(tested, 20);
+    return maxZ;
+  };
+  EXPECT_LT(check(true), kZ);
+  EXPECT_GT(check(false), kZ);
+}
+
 // ---- a point light as x_0 (path.h, delta-position lights) ----
 
 // x = L D D E on the point light of cornellBoxPointSpot, x_1 on the back wall and x_2 on the floor.

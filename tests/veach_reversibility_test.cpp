@@ -43,7 +43,7 @@ Counts proposeFromStartPaths(const SceneDesc& desc) {
   std::unique_ptr<veach::Mutation> moves[veach::kNumKinds] = {
       veach::makeBidirMutation(space), veach::makeLensPerturbation(space, 0.1, 2.0),
       veach::makeCausticPerturbation(space, 1e-4, 0.1), veach::makeMultiChainPerturbation(space, 0.1, 2.0, 1e-4, 0.1),
-      veach::makeLensSubpathMutation(space)};
+      veach::makeLensSubpathMutation(space), veach::makeDeepLensPerturbation(space, 0.1, 2.0, 1e-4, 0.1)};
   IntegratorSettings integrator;
   integrator.maxDepth = 6;
   Counts c;

@@ -99,7 +99,9 @@ void runMove(benchmark::State& state, const std::string& sceneName, int move) {
     for (int t = 0; t < veach::kNumKinds; ++t) ms.weight[t] = t == move ? 1.0 : 0.0;
   std::vector<std::unique_ptr<veach::VeachChainState>> chains;
   std::vector<Pcg32> acceptRngs;
-  const veach::VeachChainState probe(*su.space, veach::MutationSettings{}, su.starts[0], Pcg32());
+  veach::MutationSettings every;  // every move on, so that the probe tells where each one applies
+  for (double& w : every.weight) w = 1.0;
+  const veach::VeachChainState probe(*su.space, every, su.starts[0], Pcg32());
   for (size_t c = 0; c < su.starts.size() && chains.size() < kChains; ++c) {
     if (move >= 0 && !(probe.choiceProbability(move, su.starts[c]) > 0)) continue;
     chains.push_back(std::make_unique<veach::VeachChainState>(*su.space, ms, su.starts[c], Pcg32(kSeed, 2 * c)));

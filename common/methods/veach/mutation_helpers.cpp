@@ -7,7 +7,7 @@
 namespace mlt::veach {
 
 const std::vector<std::string>& mutationKindNames() {
-  static const std::vector<std::string> names = {"bidir", "lens", "caustic", "multichain", "lens-subpath"};
+  static const std::vector<std::string> names = {"bidir", "lens", "caustic", "multichain", "lens-subpath", "deep-lens"};
   return names;
 }
 

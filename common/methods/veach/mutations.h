@@ -14,6 +14,9 @@
 //                light-side neighbour is specular, x's outgoing direction turned by an exponential angle
 //                in [theta1, theta2], the next chain retraced with x's lobes (sec. 11.4.3.3).
 //  lens-subpath  replace the eye subpath E S* D by a fresh one through a uniform film position (sec. 11.4.4).
+//  deep-lens     (this project's) the multi-chain perturbation continued through diffuse vertices: the
+//                film position and the directions at the first n >= 2 non-specular vertices seen from the
+//                lens turned by small steps, the vertices between retraced (deep_lens.cpp).
 //
 // Specular chains traced from the eye are in the canonical measure of path.h; those traced from the light
 // (bidir's light side, the caustic perturbation) are converted (path.h lightChainToCanonical).
@@ -28,7 +31,15 @@
 namespace mlt::veach {
 
 // Mutation kinds: index = Proposal::kind; names as reported in statistics and metadata.
-enum MutationKind : int { kBidir = 0, kLens = 1, kCaustic = 2, kMultiChain = 3, kLensSubpath = 4, kNumKinds = 5 };
+enum MutationKind : int {
+  kBidir = 0,
+  kLens = 1,
+  kCaustic = 2,
+  kMultiChain = 3,
+  kLensSubpath = 4,
+  kDeepLens = 5,
+  kNumKinds = 6
+};
 const std::vector<std::string>& mutationKindNames();
 
 struct MutationSettings {
@@ -36,7 +47,7 @@ struct MutationSettings {
   // probability of the chosen move enters T (veach_chain.h). Lens and caustic perturbations at 2: better in
   // every one of 8 seeds on the Cornell box and door-ajar (6-9%), unresolved elsewhere (docs/VEACH.md,
   // "Move weights on the Cornell box").
-  double weight[kNumKinds] = {1.0, 2.0, 2.0, 1.0, 1.0};
+  double weight[kNumKinds] = {1.0, 2.0, 2.0, 1.0, 1.0, 0.0};
   double r1 = 0.1;          // lens perturbation: step in pixels, exponential in [r1, r2]
   double r2 = 0;            // 0: 5% of sqrt(film pixels)
   double theta1 = 1e-4;     // caustic perturbation: angle in radians, exponential in [theta1, theta2]
@@ -62,6 +73,8 @@ std::unique_ptr<Mutation> makeCausticPerturbation(const PathSpace& space, double
 std::unique_ptr<Mutation> makeLensSubpathMutation(const PathSpace& space);
 std::unique_ptr<Mutation> makeMultiChainPerturbation(const PathSpace& space, double r1, double r2, double theta1,
                                                      double theta2);
+std::unique_ptr<Mutation> makeDeepLensPerturbation(const PathSpace& space, double r1, double r2, double theta1,
+                                                   double theta2);
 
 // ---- shared helpers -----------------------------------------------------------------------------------
 // The eye chain E S* D: the index m of the first non-specular vertex seen from the lens (x_{k-1}, x_{k-2},

@@ -20,6 +20,8 @@ VeachChainState::VeachChainState(const PathSpace& space, const MutationSettings&
   moves_[kLensSubpath] = makeLensSubpathMutation(space);
   moves_[kMultiChain] = makeMultiChainPerturbation(space, settings.r1, std::max(r2, 2 * settings.r1), settings.theta1,
                                                    settings.theta2);
+  moves_[kDeepLens] = makeDeepLensPerturbation(space, settings.r1, std::max(r2, 2 * settings.r1), settings.theta1,
+                                               settings.theta2);
   fx_ = space.f(x_, &rasterX_);
 }
 

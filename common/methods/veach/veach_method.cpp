@@ -18,7 +18,7 @@ namespace mlt {
 
 namespace {
 const char* const kWeightParams[veach::kNumKinds] = {"veach-bidir", "veach-lens", "veach-caustic", "veach-multichain",
-                                                     "veach-lens-subpath"};
+                                                     "veach-lens-subpath", "veach-deep-lens"};
 }  // namespace
 
 std::vector<ParamSpec> VeachMltMethod::params() const {
