@@ -71,7 +71,6 @@ class DeepLensPerturbation final : public Mutation {
 
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     thread_local std::vector<int> d;
-    const int k = x.k();
     diffuseVertices(x, d);
     const double sum = stopWeightSum(x, d);
     if (!(sum > 0)) return false;
@@ -83,21 +82,7 @@ class DeepLensPerturbation final : public Mutation {
       if (u < stopWeight(m)) break;
       u -= stopWeight(m);
     }
-    const std::optional<Vec2> raster = perturbRaster(space_, x, rng, r1_, r2_);
-    if (!raster) return false;
-    y = x;
-    Vec3 dir;
-    y.v[k] = space_.cameraVertex(*raster, x.uLens, &dir);
-    int first = k - 1;
-    for (size_t c = 0; c < n; ++c) {
-      if (c > 0) {
-        const int dv = d[c - 1];
-        dir = perturbDirection(x, dv, dv - 1, rng, theta1_, theta2_);
-        first = dv - 1;
-      }
-      if (!retraceSpecularChain(space_, x, y, first, d[c], -1, dir, TransportMode::Radiance)) return false;
-    }
-    return true;
+    return perturbEyeChains(space_, x, rng, r1_, r2_, theta1_, theta2_, d, n, y);
   }
 
   double density(const Path& x, const Path& y) const override {
@@ -115,20 +100,7 @@ class DeepLensPerturbation final : public Mutation {
     if (!allowedStop(x, d, n)) return 0;
     for (int i = j + 1; i < k; ++i)  // the retraced specular vertices kept their lobes
       if (x.v[i].specular && transmits(x, i) != transmits(y, i)) return 0;
-    Vec2 rx, ry;
-    if (!space_.raster(x, &rx) || !space_.raster(y, &ry)) return 0;
-    const double dx = double(ry.x) - rx.x, dy = double(ry.y) - rx.y, dist = std::sqrt(dx * dx + dy * dy);
-    const Camera& cam = space_.scene().camera();
-    double T = stopWeight(n) / stopWeightSum(x, d) * exponentialStepDensity(dist, r1_, r2_) / (2 * M_PI * dist) *
-               double(cam.width()) * double(cam.height()) * space_.eyeStep(y, k - 1);
-    for (size_t c = 0; c + 1 < n && T > 0; ++c) {
-      const int dv = d[c];
-      const Vec3 wx = normalize(x.v[dv - 1].p - x.v[dv].p), wy = normalize(y.v[dv - 1].p - y.v[dv].p);
-      const double theta = std::atan2(double(length(cross(wx, wy))), double(dot(wx, wy)));
-      const double pW = exponentialStepDensity(theta, theta1_, theta2_) / (2 * M_PI * std::sin(theta));
-      T *= pW * PathSpace::cosAt(y.v[dv - 1], wy) / distanceSquared(y.v[dv].p, y.v[dv - 1].p);
-    }
-    return T;
+    return stopWeight(n) / stopWeightSum(x, d) * eyeChainsDensity(space_, x, y, r1_, r2_, theta1_, theta2_, d, n);
   }
 
  private:

@@ -58,23 +58,7 @@ class MultiChainPerturbation final : public Mutation {
   bool propose(const Path& x, Pcg32& rng, Path& y) const override {
     thread_local std::vector<int> d;
     chainEnds(x, d);
-    const int k = x.k();
-    const std::optional<Vec2> raster = perturbRaster(space_, x, rng, r1_, r2_);
-    if (!raster) return false;
-    y = x;
-    Vec3 dir;
-    y.v[k] = space_.cameraVertex(*raster, x.uLens, &dir);
-    int first = k - 1;
-    for (size_t c = 0; c < d.size(); ++c) {
-      if (c > 0) {
-        // Turn x's direction at d_{c-1} (toward the light) by theta about a uniform axis.
-        const int dv = d[c - 1];
-        dir = perturbDirection(x, dv, dv - 1, rng, theta1_, theta2_);
-        first = dv - 1;
-      }
-      if (!retraceSpecularChain(space_, x, y, first, d[c], -1, dir, TransportMode::Radiance)) return false;
-    }
-    return true;
+    return perturbEyeChains(space_, x, rng, r1_, r2_, theta1_, theta2_, d, d.size(), y);
   }
 
   double density(const Path& x, const Path& y) const override {
@@ -87,21 +71,7 @@ class MultiChainPerturbation final : public Mutation {
       const bool diffuse = std::find(d.begin(), d.end(), i) != d.end();
       if (!diffuse && transmits(x, i) != transmits(y, i)) return 0;
     }
-    Vec2 rx, ry;
-    if (!space_.raster(x, &rx) || !space_.raster(y, &ry)) return 0;
-    const double dx = double(ry.x) - rx.x, dy = double(ry.y) - rx.y, dist = std::sqrt(dx * dx + dy * dy);
-    const Camera& cam = space_.scene().camera();
-    double T = exponentialStepDensity(dist, r1_, r2_) / (2 * M_PI * dist) * double(cam.width()) * double(cam.height()) *
-               space_.eyeStep(y, k - 1);
-    for (size_t c = 0; c + 1 < d.size() && T > 0; ++c) {
-      const int dv = d[c];
-      const Vec3 wx = normalize(x.v[dv - 1].p - x.v[dv].p), wy = normalize(y.v[dv - 1].p - y.v[dv].p);
-      const double theta = std::atan2(double(length(cross(wx, wy))), double(dot(wx, wy)));
-      const double pW = exponentialStepDensity(theta, theta1_, theta2_) / (2 * M_PI * std::sin(theta));
-      const float d2 = distanceSquared(y.v[dv].p, y.v[dv - 1].p);
-      T *= pW * PathSpace::cosAt(y.v[dv - 1], wy) / d2;
-    }
-    return T;
+    return eyeChainsDensity(space_, x, y, r1_, r2_, theta1_, theta2_, d, d.size());
   }
 
  private:

@@ -101,4 +101,48 @@ bool retraceSpecularChain(const PathSpace& space, const Path& x, Path& y, int fi
   }
 }
 
+double filmStepDensity(const PathSpace& space, const Path& x, const Path& y, double r1, double r2) {
+  Vec2 rx, ry;
+  if (!space.raster(x, &rx) || !space.raster(y, &ry)) return 0;
+  const double dx = double(ry.x) - rx.x, dy = double(ry.y) - rx.y, d = std::sqrt(dx * dx + dy * dy);
+  const double pFilm = exponentialStepDensity(d, r1, r2) / (2 * M_PI * d);
+  const Camera& cam = space.scene().camera();
+  return pFilm * double(cam.width()) * double(cam.height()) * space.eyeStep(y, y.k() - 1);
+}
+
+bool perturbEyeChains(const PathSpace& space, const Path& x, Pcg32& rng, double r1, double r2, double theta1,
+                      double theta2, const std::vector<int>& ends, size_t n, Path& y) {
+  const int k = x.k();
+  const std::optional<Vec2> raster = perturbRaster(space, x, rng, r1, r2);
+  if (!raster) return false;
+  y = x;
+  Vec3 dir;
+  y.v[k] = space.cameraVertex(*raster, x.uLens, &dir);
+  int first = k - 1;
+  for (size_t c = 0; c < n; ++c) {
+    if (c > 0) {
+      // Turn x's direction at ends[c-1] (toward the light) by theta about a uniform axis.
+      const int e = ends[c - 1];
+      dir = perturbDirection(x, e, e - 1, rng, theta1, theta2);
+      first = e - 1;
+    }
+    if (!retraceSpecularChain(space, x, y, first, ends[c], -1, dir, TransportMode::Radiance)) return false;
+  }
+  return true;
+}
+
+double eyeChainsDensity(const PathSpace& space, const Path& x, const Path& y, double r1, double r2, double theta1,
+                        double theta2, const std::vector<int>& ends, size_t n) {
+  double T = filmStepDensity(space, x, y, r1, r2);
+  for (size_t c = 0; c + 1 < n && T > 0; ++c) {
+    const int e = ends[c];
+    const Vec3 wx = normalize(x.v[e - 1].p - x.v[e].p), wy = normalize(y.v[e - 1].p - y.v[e].p);
+    const double theta = std::atan2(double(length(cross(wx, wy))), double(dot(wx, wy)));
+    const double pW = exponentialStepDensity(theta, theta1, theta2) / (2 * M_PI * std::sin(theta));
+    const float d2 = distanceSquared(y.v[e].p, y.v[e - 1].p);
+    T *= pW * PathSpace::cosAt(y.v[e - 1], wy) / d2;
+  }
+  return T;
+}
+
 }  // namespace mlt::veach

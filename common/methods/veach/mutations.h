@@ -98,6 +98,21 @@ std::optional<Vec2> perturbRaster(const PathSpace& space, const Path& x, Pcg32& 
 // x's direction from vertex `at` toward `toward`, turned by theta (an exponential step in [theta1,
 // theta2]) about a uniform axis (two uniforms).
 Vec3 perturbDirection(const Path& x, int at, int toward, Pcg32& rng, double theta1, double theta2);
+// The lens, multi-chain and deep lens perturbations' film step as a density of y's first vertex in the
+// canonical measure: p_R(|d|) / (2 pi |d|) * W H * pdfDir(y) |cos y_{k-1}| / |y_k - y_{k-1}|^2 (|d| the
+// distance between x's and y's film positions; perturbations.cpp); 0 if either has none.
+double filmStepDensity(const PathSpace& space, const Path& x, const Path& y, double r1, double r2);
+// The eye-side chains of the multi-chain and deep lens perturbations: y = x with its film position moved
+// (perturbRaster) and the chains ending at x's non-specular vertices ends[0] > ends[1] > ... > ends[n-1]
+// retraced from the eye with x's lobes, the direction at each ends[c], c < n - 1, toward the next chain
+// x's turned by an exponential angle in [theta1, theta2] (perturbDirection). False if a chain fails.
+bool perturbEyeChains(const PathSpace& space, const Path& x, Pcg32& rng, double r1, double r2, double theta1,
+                      double theta2, const std::vector<int>& ends, size_t n, Path& y);
+// Its density: filmStepDensity times, per turned direction, p_w(theta) |cos y_{e-1}| / |y_e - y_{e-1}|^2
+// (e = ends[c], c < n - 1, theta the angle between x's and y's directions there, p_w(theta) =
+// p_theta(theta) / (2 pi sin theta)).
+double eyeChainsDensity(const PathSpace& space, const Path& x, const Path& y, double r1, double r2, double theta1,
+                        double theta2, const std::vector<int>& ends, size_t n);
 // Retraces y's vertices first, first + step, ..., last (step = +1 toward the eye, -1 toward the light)
 // from y.v[first - step] in direction dir: the vertices before `last` follow x's lobes (followLobe in `mode`) and are specular;
 // `last` must be a non-Dirac surface (or, as vertex 0, a light). False if a ray escapes or a lobe or the

@@ -68,12 +68,7 @@ class LensPerturbation final : public Mutation {
     const int k = x.k(), m = eyeChainEnd(x);
     if (y.k() != k || m < 1 || eyeChainEnd(y) != m || !applicable(y)) return 0;
     if (!sameKeptPoints(x, y, m - 1) || !x.v[k].samePoint(y.v[k]) || !sameChain(x, y, m + 1, k - 1)) return 0;
-    Vec2 rx, ry;
-    if (!space_.raster(x, &rx) || !space_.raster(y, &ry)) return 0;
-    const double dx = double(ry.x) - rx.x, dy = double(ry.y) - rx.y, d = std::sqrt(dx * dx + dy * dy);
-    const double pFilm = exponentialStepDensity(d, r1_, r2_) / (2 * M_PI * d);
-    const Camera& cam = space_.scene().camera();
-    return pFilm * double(cam.width()) * double(cam.height()) * space_.eyeStep(y, k - 1);
+    return filmStepDensity(space_, x, y, r1_, r2_);
   }
 
  private:
