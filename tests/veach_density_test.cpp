@@ -89,6 +89,18 @@ std::vector<Bin> wallBins(const PathSpace& space, int n) {
   return bins;
 }
 
+// A bin's share of N proposals (count) against the integral of T over it, estimated from M uniform points
+// in the bin (area A; sum and sum of squares of T): |difference| over its combined standard error, or
+// nullopt where fewer than 30 proposals are expected and seen (too few to compare).
+std::optional<double> binZ(uint64_t count, uint64_t N, double sum, double sq, int M, double A) {
+  const double mean = sum / M;
+  const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
+  const double got = double(count) / double(N);
+  if (std::max(got, expect) * double(N) < 30) return std::nullopt;
+  const double seGot = std::sqrt(std::max(got, expect) / double(N));
+  return std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect);
+}
+
 struct Check {
   double maxZ = 0;
   int binsTested = 0;
@@ -128,16 +140,15 @@ Check checkDensity(const PathSpace& space, const veach::Mutation& move, const Pa
       sum += T;
       sq += T * T;
     }
-    const double A = bins[b].area(), mean = sum / M;
-    const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
-    const double got = double(count[b]) / double(N), seGot = std::sqrt(std::max(got, expect) / double(N));
     c.inBins += count[b];
-    if (std::max(got, expect) * double(N) < 30) continue;
+    const std::optional<double> z = binZ(count[b], N, sum, sq, M, bins[b].area());
+    if (!z) continue;
     if (singular && bins[b].contains(*singular)) continue;
     ++c.binsTested;
-    const double z = std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect);
-    if (z > c.maxZ) c.maxZ = z;
-    if (z > kZ) std::printf("  bin %zu: proposals %.5g, integral of T %.5g (z = %.2f)\n", b, got, expect, z);
+    if (*z > c.maxZ) c.maxZ = *z;
+    if (*z > kZ)
+      std::printf("  bin %zu: proposals %.5g, integral of T %.5g (z = %.2f)\n", b, double(count[b]) / double(N),
+                  bins[b].area() * sum / M, *z);
   }
   return c;
 }
@@ -347,13 +358,11 @@ TEST(VeachDensity, DeepLensPerturbationJointly) {
           sum += T;
           sq += T * T;
         }
-        const double A = b2[i2].area() * b1[i1].area(), mean = sum / M;
-        const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
-        const double got = double(count[i2 * b1.size() + i1]) / double(N);
-        if (std::max(got, expect) * double(N) < 30) continue;
-        const double seGot = std::sqrt(std::max(got, expect) / double(N));
+        const std::optional<double> z =
+            binZ(count[i2 * b1.size() + i1], N, sum, sq, M, b2[i2].area() * b1[i1].area());
+        if (!z) continue;
         ++tested;
-        maxZ = std::max(maxZ, std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect));
+        maxZ = std::max(maxZ, *z);
       }
     }
     std::printf("deep lens perturbation%s: %d bin pairs tested, max z %.2f\n", withCosine ? "" : " (T without the cosine)",
