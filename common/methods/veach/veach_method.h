@@ -1,7 +1,8 @@
 // The method "veach-mlt": Veach's path-space Metropolis light transport (Veach 1997, ch. 11; Veach and
-// Guibas 1997) with all five of its mutations and a sixth of this project's, the deep lens perturbation, off by default (docs/VEACH.md). Registered in registry.cpp. Its plan is the
-// pssmlt-bdpt bootstrap and chain allocation (this class is the ChainJobSpec that plans it: the bdpt
-// target, one path-length slot); its units are path-space chains (veach_job.h), not Kelemen chains.
+// Guibas 1997) with all five of its mutations and a sixth of this project's, the deep lens perturbation,
+// off by default (docs/VEACH.md). Registered in registry.cpp. Its plan is the pssmlt-bdpt bootstrap and
+// chain allocation (this class is the ChainJobSpec that plans it: the bdpt target, one path-length slot);
+// its units are path-space chains (veach_job.h), not Kelemen chains.
 //
 // Parameters (RenderSettings::params, CLI --<name>):
 //   veach-bidir, veach-lens, veach-caustic, veach-multichain, veach-lens-subpath, veach-deep-lens
