@@ -83,7 +83,8 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   Normalization& norm = plan.norm;
   norm.b = boot.b;
   norm.bStdErr = boot.bStdErr;
-  norm.bootstrapSamples = boot.candidates;
+  norm.bootstrapSamples = 0;
+  for (const LengthBootstrap& lb : boot.lengths) norm.bootstrapSamples += lb.c.size() - lb.estimateFrom;
   norm.bootstrapSeconds = boot.seconds;
   if (bootstrap.pilot && settings.directLight == DirectLight::Auto) {  // the pilot chose (else it only sized the pass)
     norm.directShare = bootstrap.pilot->share;
