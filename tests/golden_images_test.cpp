@@ -90,10 +90,6 @@
 //    lt (no camera samples) and the chains themselves unchanged.
 //  - veach-mlt on glossy-plates: the light-view pass's samples of a pixel at its Sobol points too
 //    (light_view.cpp). Where no light-view sample carries light at this budget the digest is unchanged.
-//  - Every chain method on every scene (pssmlt, pssmlt-bdpt, mmlt, rjmlt, veach-mlt): a sized bootstrap's
-//    b_k comes from the candidates drawn after its first round planned their count, not from every
-//    candidate (bootstrap.h; counting the first round biased b low on heavy tails), and the budget left
-//    after the doublings goes to the best length. pt, lt and bdpt unchanged.
 //
 // Besides scenes/*.xml as they are, "cornell-variety" is cornell-box.xml with the BSDFs, lights and
 // camera the bundled scenes do not use (plastic, rough plastic, rough and thin dielectric, two-sided
@@ -242,34 +238,34 @@ const Case kCases[] = {
     Case{"cornell-box", "pt", "49345801ed0f37a9c77aaa01b77a84f0247fa1be9b2ae9a685b681dcbf433a6c"},
     Case{"cornell-box", "lt", "aac1d685dbcbddd5940fe1adc62a37adce95225788e2baf91d2b8172fc75016b"},
     Case{"cornell-box", "bdpt", "ae0358f74b9772b87f2a5a9a3322f522d5e674c098dfb57f46b42a25a0c6e9e4"},
-    Case{"cornell-box", "pssmlt", "e923ff34ddd40cfb7dcafedcee9cd43fe11861161aeeb10fe0b13f66aad39cc2"},
-    Case{"cornell-box", "pssmlt-bdpt", "faa29c884b03321afeb751b34c3c611ea351b45a295f0654161bc5303416e71f"},
-    Case{"cornell-box", "mmlt", "8a093fd26e3a8b105dca044c01164b3ada85a0b6d050915c2b97d4cecd364c63"},
+    Case{"cornell-box", "pssmlt", "3b5e17ca6842106c16947553d3d0191a194e2e475ef08af3fa96cb9f103e7405"},
+    Case{"cornell-box", "pssmlt-bdpt", "671e468962476209c008b870eef0be4fcf8b6988382ddfb9a86cc1e59553ffcc"},
+    Case{"cornell-box", "mmlt", "68d3de8e6964baf7083034f68da9a401c543c840bdc7a2cf9719c913c280abcc"},
     Case{"caustic-mirror", "pt", "fdb2510969422b355100d947eeaeb36e9c1915032797b7284799d57a65bab618"},
     Case{"caustic-mirror", "lt", "f3cc103136423a57975750907ebc1d367e2985ac6338976d4d5a439f50323f4a"},
     Case{"caustic-mirror", "bdpt", "bf6c6ddb7518110d2ed686e0d7bdee372e1400b5dd092da72276d6574e16fec6"},
-    Case{"caustic-mirror", "pssmlt", "2d76a2aeef8cf309dff6b294254fe1ff064af8ca99f5c3b07529ed979517c2ff"},
-    Case{"caustic-mirror", "pssmlt-bdpt", "43b235e184fac9312024c90eaea62be6a6af29f08c3480ff3022ac1ac283401d"},
-    Case{"caustic-mirror", "mmlt", "b5e43b45381bf4012ec2b3ae7325b00d1eb703a542c1537ec8c00fa40d5e75a5"},
+    Case{"caustic-mirror", "pssmlt", "9abbf4f23a18e33a7d88cabf8fbdc3cb68875564bb7a27d8885043fe9462eb94"},
+    Case{"caustic-mirror", "pssmlt-bdpt", "5d6b1b80611af77a495245d15b600364236383cb8f5cab7a52c328de337883fa"},
+    Case{"caustic-mirror", "mmlt", "0f021744e31bbc2445f7488676259b189cb693b08b333999edf890e8a7a228d9"},
     Case{"glossy-plates", "pt", "cd92894675c97af4e6e5d83c964e939584796ff3cf62b2ef371474b2377fddcf"},
     Case{"glossy-plates", "lt", "30c49b64e9e3551e9215d5e0c4f9e8a239c65302411f35664ba18e8ca1bb1d04"},
     Case{"glossy-plates", "bdpt", "3d058b3268176812904364d0ec551f8e6e190e97e6f32daba91003fe8b852920"},
-    Case{"glossy-plates", "pssmlt", "220fb9d1c8827afb22986d166c6ebef86045a2f764020b73ca623d618657a022"},
-    Case{"glossy-plates", "pssmlt-bdpt", "6817e07c5f0aea462ec281660a95410ec89b80e358b954710aa8d6638c12b9ca"},
-    Case{"glossy-plates", "mmlt", "6b09919e33e37931840d6d2c60a03b8e25c28a5197542281f07961f897ab104b"},
+    Case{"glossy-plates", "pssmlt", "9d3c3dee6ac804af007e5d8939abe00f1595350522e6ed49b87371819efae27b"},
+    Case{"glossy-plates", "pssmlt-bdpt", "a07c5f4e8101e630ad563f0607a7541cc3cf39602b6fedeaa925375c2c037fa7"},
+    Case{"glossy-plates", "mmlt", "10ade88c6b5112cf07d007e59dbe43c8653bc6611bde044d2a634415b60ea63e"},
     Case{"cornell-variety", "pt", "3d9d557ab4f7a6b5dd87016da6a8467dbb772905e49e2c5c66de04b00a41fab2"},
     Case{"cornell-variety", "lt", "284263e3fa7491c1e5dad53bf536982ecff1db2bbcbb140e9cba25fdbd48bca6"},
     Case{"cornell-variety", "bdpt", "da9c615baf953d5d20ac305d1d741c50d6d3c9c03821638ebf09712c52dbb323"},
-    Case{"cornell-variety", "pssmlt", "2593f770ebc86824b4526ae351f7d7a9df4d59aba5cbc817af33ec939aea371f"},
-    Case{"cornell-variety", "pssmlt-bdpt", "8732537e0575c2465bdc231981b9e0fa03d302ba6133634a4edbb253788cca8a"},
-    Case{"cornell-variety", "mmlt", "0aea90e2f919919f4361e994661c70d76f4608303ecdb0bbca55ea65e9b62a3f"},
-    Case{"cornell-box", "rjmlt", "e69c5f86b810b983c6a157029646b0c18bfdfff71c7268b2654226b9eafe25fb"},
-    Case{"caustic-mirror", "rjmlt", "82fcd1331f8753417c48f756b2d293535d6e0b5faa6990ff6b321b3a81f7cd4c"},
-    Case{"glossy-plates", "rjmlt", "3d6233bd317493276c0ea9dc857c46a201fbbd07b4d7d8992778cac44ced8571"},
-    Case{"cornell-variety", "rjmlt", "c52026d6d96462932b6555e1244fb0b7b86468a28fda9f8bd8afb779c468069c"},
-    Case{"cornell-box", "veach-mlt", "8b88160069075ec61aaa0316381aebd025041475401ed20b8da92d1f6ee423c9"},
-    Case{"caustic-mirror", "veach-mlt", "f02cc157be016b0e66a12ecc8229ef481bc540930c6349b1fddce14c6d841bee"},
-    Case{"glossy-plates", "veach-mlt", "b5a9d7023efbd85b8fd028f67f6e5b42dc1b9613b8a3f396eb16a5f85a2f8da5"},
+    Case{"cornell-variety", "pssmlt", "19a4dd05d795f194fc42d7a91cee09443ebb962a49333d8c844f5c5715995cd4"},
+    Case{"cornell-variety", "pssmlt-bdpt", "45ed14c33bdd83985409816878b033a1e76e1503d2a0629e9168b795f302ac76"},
+    Case{"cornell-variety", "mmlt", "92a50d3ac9d1a554ed2b2a1fabec665e7ecaed3be5a4e1653aad298201873056"},
+    Case{"cornell-box", "rjmlt", "29d482c33ecedc43dda96b54cbc9259de86680c747252e0ebb2cb83638b8dfa8"},
+    Case{"caustic-mirror", "rjmlt", "5172691fa049dcbd3a58de609c25a5cb6932afbc53b538b6fa011a2c3b51322c"},
+    Case{"glossy-plates", "rjmlt", "fa4bcb3b5769aede0ed64f81d3ed5cd0b6729051b73dabb513fc236f4e8f698e"},
+    Case{"cornell-variety", "rjmlt", "259ee0e6288db0f62d3800cf63766455e0ff1332679678ca8c9896eda46b4d8b"},
+    Case{"cornell-box", "veach-mlt", "2f0d4779269e0cf7865c2e2fdd232c6bf6fb663b6935f2523aebf902e0773f8f"},
+    Case{"caustic-mirror", "veach-mlt", "30b75a0bd5286ec3c752cde7b88dc34278a19d51d552edd09ebe64f95e8f711e"},
+    Case{"glossy-plates", "veach-mlt", "beab8ab739f3d8b5ed1f2e612739a9ad1e9107729c4bc348282e53103a142649"},
     // cornell-variety has a directional light, which veach-mlt refuses with a clear error (area, point and
     // spot lights only), so it has no veach-mlt case.
 };

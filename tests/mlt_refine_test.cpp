@@ -401,11 +401,11 @@ TEST(BootstrapSize, AutomaticSizeIsASmallShareOfTheJob) {
   const JobPlan plan = planJob(cornell(), auto16);
   EXPECT_EQ(plan.settings.bootstrapSamples, int(kMinBootstrapPerLength));
   // It holds the cost of that many of the chains' mutations (bootstrap.h, chainMixCost): a quarter of
-  // them to start with, which sizes the rest, then at least as many fresh ones in whole randomization
-  // groups, doubled while the budget allows and topped up; b's samples are the fresh ones.
+  // them to start with, doubled while the budget allows.
   const uint64_t n0 = kMinBootstrapPerLength / 4, got = plan.norm.bootstrapSamples;
   EXPECT_GE(got, n0);
-  EXPECT_EQ(got % kCandidateGroups, 0u) << got;
+  EXPECT_EQ(got % n0, 0u);
+  EXPECT_EQ((got / n0) & (got / n0 - 1), 0u) << got << ": a quarter, doubled";
 }
 
 // The bootstrap's budget counts cost (bootstrap.h): on a real scene every candidate reports the numbers it

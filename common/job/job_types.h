@@ -44,8 +44,6 @@ struct Normalization {
   std::vector<BootstrapEstimate> bootstrapB; // per path length slot (pssmlt: 0; mmlt: k)
   std::vector<uint64_t> mutationsPerLength;  // mmlt: total planned mutations per length
   uint64_t totalMutations = 0;
-  // The bootstrap's candidates that estimate b (a sized bootstrap's first round, which only sized it, is
-  // not among them: mlt/bootstrap.h; mmlt's b_1 camera rays are not counted).
   uint64_t bootstrapSamples = 0;
   double bootstrapSeconds = 0;
   // The direct-light pilot of a job whose settings left the choice to the plan (DirectLight::Auto,

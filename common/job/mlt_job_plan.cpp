@@ -83,8 +83,7 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
   Normalization& norm = plan.norm;
   norm.b = boot.b;
   norm.bStdErr = boot.bStdErr;
-  norm.bootstrapSamples = 0;
-  for (const LengthBootstrap& lb : boot.lengths) norm.bootstrapSamples += lb.c.size() - lb.estimateFrom;
+  norm.bootstrapSamples = boot.candidates;
   norm.bootstrapSeconds = boot.seconds;
   if (bootstrap.pilot && settings.directLight == DirectLight::Auto) {  // the pilot chose (else it only sized the pass)
     norm.directShare = bootstrap.pilot->share;

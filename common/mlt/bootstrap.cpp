@@ -2,7 +2,6 @@
 
 #include "common/mlt/allocation.h"
 
-#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -16,10 +15,9 @@
 
 namespace mlt {
 
-BootstrapEstimate summarizeCandidates(const std::vector<double>& c) { return summarizeCandidates(c.data(), c.size()); }
-
-BootstrapEstimate summarizeCandidates(const double* c, uint64_t N) {
+BootstrapEstimate summarizeCandidates(const std::vector<double>& c) {
   BootstrapEstimate e;
+  const uint64_t N = c.size();
   e.n = N;
   if (N == 0) return e;
   double sum = 0;
@@ -46,7 +44,7 @@ BootstrapEstimate summarizeCandidates(const double* c, uint64_t N) {
   // The tail split (develop.h (D3)): tau = the tailCandidates(N)-th largest c.
   const uint64_t m = tailCandidates(N);
   if (N > 2 * m) {
-    std::vector<double> sorted(c, c + N);
+    std::vector<double> sorted = c;
     std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(N - m), sorted.end());
     e.tau = sorted[N - m];
   }
@@ -78,12 +76,8 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   if (config.pathLengths.empty()) throw std::invalid_argument("bootstrap: no path lengths");
   if (config.maxGrowth < 1) throw std::invalid_argument("bootstrap: maxGrowth must be >= 1");
   const uint64_t N0 = config.candidatesPerLength;
-  // The most candidates a length may hold: its slot of candidate indices, or with a target the first round
-  // and maxGrowth x N0 fresh ones.
-  const uint64_t slot = (uint64_t(1) << kCandidateSlotBits) - 1;
-  const bool sized = config.totalCandidates > 0 || (config.targetRelStdErr > 0 && config.maxGrowth > 1);
-  const uint64_t maxN = config.totalCandidates > 0 ? slot : config.maxGrowth > 1 ? N0 * (config.maxGrowth + 1) : N0;
-  if (maxN > slot || (sized && 2 * N0 + kCandidateGroups > slot))
+  const uint64_t maxN = config.totalCandidates > 0 ? std::max(N0, config.totalCandidates) : N0 * config.maxGrowth;
+  if (maxN >= (uint64_t(1) << kCandidateSlotBits))
     throw std::invalid_argument("bootstrap: too many candidates per path length: " + std::to_string(maxN));
   BootstrapResult result;
   std::vector<double> varMean(config.pathLengths.size(), 0.0);  // variance of each b_k
@@ -122,91 +116,67 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
                                  " reported no valid luminance (" + std::to_string(lb.luminance[i]) + ")");
     }
   };
-  // Sequential reductions in index order (bit-identical for any thread count). A length's estimate
-  // summarizes its candidates [from, c.size()).
-  const auto reduce = [&](size_t l, uint64_t from) {
+  // Sequential reductions in index order (bit-identical for any thread count).
+  const auto reduce = [&](size_t l) {
     LengthBootstrap& lb = result.lengths[l];
-    lb.estimateFrom = from;
-    lb.estimate = summarizeCandidates(lb.c.data() + from, lb.c.size() - from);
+    lb.estimate = summarizeCandidates(lb.c);
     varMean[l] = lb.estimate.stdErr * lb.estimate.stdErr;
-    if (!lb.luminance.empty()) lb.luminanceEstimate = summarizeCandidates(lb.luminance.data() + from, lb.luminance.size() - from);
+    if (!lb.luminance.empty()) lb.luminanceEstimate = summarizeCandidates(lb.luminance);
   };
-  // The first round: N0 candidates per length, a count fixed in advance.
   for (size_t l = 0; l < config.pathLengths.size(); ++l) {
     LengthBootstrap lb;
     lb.pathLength = config.pathLengths[l];
     lb.firstCandidate = (config.firstSlot + uint64_t(l)) << kCandidateSlotBits;
     evaluate(lb, 0, N0);
     result.lengths.push_back(std::move(lb));
-    reduce(l, 0);
+    reduce(l);
   }
-  if (sized) {
-    // Sizing (bootstrap.h): the first round decides how many more candidates each length gets, from its
-    // per-candidate variance s2_l = N0 se_l^2 (the groups' spread: it keeps the film positions' stratification)
-    // and its cost, predicting se_l^2 = s2_l / f_l for f_l fresh candidates. Then the fresh ones are drawn and
-    // b_l is their mean alone: their count was fixed before any of them was seen. (Counting the first round
-    // too biased b low: a first round that missed the rare bright paths looks certain, stops small and keeps
-    // its low mean, one that caught them grows and dilutes them; on cornell-spheres' mmlt b_k was 3-15% low
-    // on average: tests/mlt_bootstrap_test.cpp, SizedBIsUnbiasedOnAHeavyTail, and docs/CHAINS.md.) The
-    // first round still seeds chains (the alias table holds every candidate) and prices the budget.
-    const uint64_t G = kCandidateGroups;
-    const uint64_t start = (N0 + G - 1) / G * G;  // fresh counts in whole randomization groups
-    std::vector<double> s2(result.lengths.size()), fresh(result.lengths.size(), 0.0);
-    for (size_t l = 0; l < result.lengths.size(); ++l) {
-      s2[l] = varMean[l] * double(N0);
-      if (!seedOnly(l)) fresh[l] = double(start);
-    }
-    const auto cap = [&](size_t l) { return double(maxN) - double(N0) - fresh[l]; };  // room left in the slot
-    if (config.totalCandidates > 0) {
-      // A budget: every length's first fresh round, then doublings of the length whose doubling removes most
-      // of b's predicted variance per unit of cost (largest s2_l / (f_l^2 cost_l); lowest index on ties)
-      // while the total cost fits, then what is left to that length in whole groups.
-      std::vector<double> cost(result.lengths.size());
-      for (size_t l = 0; l < result.lengths.size(); ++l) cost[l] = candidateCost(result.lengths[l]);
-      const double budget = double(config.totalCandidates) * chainMixCost(result.lengths);
-      double spent = config.spentCost + bootstrapCost(result.lengths);
-      for (size_t l = 0; l < result.lengths.size(); ++l) spent += fresh[l] * cost[l];
-      const auto gain = [&](size_t l) {
-        return fresh[l] > 0 && s2[l] > 0 ? s2[l] / (fresh[l] * fresh[l] * cost[l]) : 0.0;
-      };
+  if (config.totalCandidates > 0) {
+    // Budgeted sizing, in cost (numbers drawn; all lengths alike for an unbinned bootstrap): the budget is
+    // totalCandidates candidates of the chains' mix, as the first round measures it. Double the length
+    // whose doubling removes most of b's variance per unit of cost (largest se_k^2 / (n_k cost_k); lowest
+    // index on ties) while the total cost stays within the budget. A length's cost is that of its first
+    // round, so that the decisions stay a pure function of the candidates' values and work.
+    std::vector<double> cost(result.lengths.size());
+    for (size_t l = 0; l < result.lengths.size(); ++l) cost[l] = candidateCost(result.lengths[l]);
+    const double budget = double(config.totalCandidates) * chainMixCost(result.lengths);
+    double spent = config.spentCost + bootstrapCost(result.lengths);
+    for (;;) {
       size_t best = 0;
-      for (;;) {
-        best = 0;
-        for (size_t l = 1; l < result.lengths.size(); ++l)
-          if (gain(l) > gain(best)) best = l;
-        if (!(gain(best) > 0) || spent + fresh[best] * cost[best] > budget || fresh[best] > cap(best)) break;
-        spent += fresh[best] * cost[best];
-        fresh[best] *= 2;
-      }
-      if (gain(best) > 0 && budget > spent) {
-        const double more = std::min(std::floor((budget - spent) / (cost[best] * double(G))) * double(G), cap(best));
-        if (more > 0) fresh[best] += std::floor(more / double(G)) * double(G);
-      }
-    } else {
-      // A target: while b's predicted relative standard error exceeds it, the length with the largest
-      // predicted variance doubles, up to maxGrowth x N0 fresh candidates (maxN).
-      const double b = [&] {
-        double sum = 0;
-        for (size_t l = 0; l < result.lengths.size(); ++l) sum += seedOnly(l) ? 0.0 : result.lengths[l].estimate.b;
-        return sum;
-      }();
-      const auto var = [&](size_t l) { return fresh[l] > 0 ? s2[l] / fresh[l] : 0.0; };
-      for (;;) {
-        double total = 0;
-        size_t worst = 0;
-        for (size_t l = 0; l < result.lengths.size(); ++l) {
-          total += var(l);
-          if (var(l) > var(worst)) worst = l;
-        }
-        if (!(b > 0 && std::sqrt(total) > config.targetRelStdErr * b && var(worst) > 0)) break;
-        if (fresh[worst] > cap(worst)) break;
-        fresh[worst] *= 2;
-      }
+      const auto gain = [&](size_t l) {
+        return seedOnly(l) ? 0.0 : varMean[l] / (double(result.lengths[l].c.size()) * cost[l]);
+      };
+      for (size_t l = 1; l < result.lengths.size(); ++l)
+        if (gain(l) > gain(best)) best = l;
+      LengthBootstrap& lb = result.lengths[best];
+      const uint64_t n = lb.c.size();
+      if (!(varMean[best] > 0) || spent + double(n) * cost[best] > budget) break;
+      evaluate(lb, n, 2 * n);
+      spent += double(n) * cost[best];
+      reduce(best);
     }
-    for (size_t l = 0; l < result.lengths.size(); ++l) {
-      if (!(fresh[l] > 0)) continue;
-      evaluate(result.lengths[l], N0, N0 + uint64_t(fresh[l]));
-      reduce(l, N0);
+  } else {
+    // Sizing to a target: while b = sum b_k is not known to it, double the length that contributes most
+    // to its variance (lowest index on ties). Once that length is at its cap, stop: growing lengths whose
+    // variance is smaller cannot bring the total under the target as fast as it costs.
+    for (;;) {
+      double b = 0, var = 0;
+      for (size_t l = 0; l < result.lengths.size(); ++l) {
+        if (seedOnly(l)) continue;
+        b += result.lengths[l].estimate.b;
+        var += varMean[l];
+      }
+      if (!(config.targetRelStdErr > 0 && b > 0 && std::sqrt(var) > config.targetRelStdErr * b)) break;
+      size_t worst = 0;
+      const auto growable = [&](size_t l) { return seedOnly(l) ? 0.0 : varMean[l]; };
+      for (size_t l = 1; l < result.lengths.size(); ++l)
+        if (growable(l) > growable(worst)) worst = l;
+      if (!(growable(worst) > 0)) break;
+      if (result.lengths[worst].c.size() >= maxN) break;
+      LengthBootstrap& lb = result.lengths[worst];
+      const uint64_t n = lb.c.size();
+      evaluate(lb, n, std::min(maxN, 2 * n));
+      reduce(worst);
     }
   }
   double var = 0;
@@ -217,9 +187,8 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     var += varMean[l];
     result.candidates += lb.c.size();
     if (lb.pathLength >= 0)
-      spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates{}", lb.pathLength, lb.estimate.b,
-                   lb.estimate.stdErr, lb.estimate.b > 0 ? 100 * lb.estimate.stdErr / lb.estimate.b : 0.0,
-                   lb.estimate.n, lb.estimateFrom > 0 ? fmt::format(" (and {} that sized it)", lb.estimateFrom) : "");
+      spdlog::info("bootstrap: b_{} = {:.6g} +- {:.3g} ({:.2f}%) from {} candidates", lb.pathLength, lb.estimate.b, lb.estimate.stdErr,
+                   lb.estimate.b > 0 ? 100 * lb.estimate.stdErr / lb.estimate.b : 0.0, lb.c.size());
   }
   result.bStdErr = std::sqrt(var);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

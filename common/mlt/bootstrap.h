@@ -10,16 +10,16 @@
 //
 // Sizing (architecture notes: a small bootstrap misestimates b, and an error in b is an error in the
 // image's brightness that no number of mutations removes): every length starts with candidatesPerLength
-// candidates (the first round). A sized bootstrap (a budget, totalCandidates, or a target, targetRelStdErr
-// with maxGrowth > 1) then plans from the first round alone how many fresh candidates each length gets
-// (its per-candidate variance and cost predict how a count reduces b's variance; at least one first
-// round's worth each), draws them, and estimates b_k from the fresh ones only (LengthBootstrap::
-// estimateFrom): their count is fixed before any of them is seen, so b_k is unbiased. A count that follows
-// the values it is averaged with is not: a round that missed a heavy tail looks certain and stops with a low
-// mean, one that caught it grows and dilutes it (the rule before this one biased cornell-spheres' b_k 3-15%
-// low on average). Every candidate seeds chains (the alias table) and the first round prices the budget.
+// candidates; while b = sum b_k has a relative standard error sqrt(sum se_k^2) / b above targetRelStdErr,
+// the length with the largest variance se_k^2 doubles its count; sizing stops when that length reaches
+// maxGrowth x candidatesPerLength.
 // The decisions depend only on the candidates' values, so the result is still a pure function of (seed,
-// settings).
+// settings). They also bias b_k low where c has a heavy tail (optional stopping: a length that missed its
+// rare bright paths looks certain and stops small, one that caught them grows and dilutes them; on
+// cornell-spheres' mmlt the bootstrap's b was 3.7% low on average over 401 runs, the image 0.14%), and by the
+// same dilution they damp that tail: b_k from fresh candidates of a count fixed in advance was unbiased but
+// left one run in seven on caustic-mirror ruined by a single giant candidate (docs/CHAINS.md, "mmlt's
+// brightness on cornell-spheres"), so this rule stays until c's tail is lighter.
 //
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
@@ -59,13 +59,11 @@ using BinnedCandidateFnFactory = std::function<BinnedCandidateFn()>;
 struct BootstrapConfig {
   uint64_t candidatesPerLength = 100000;  // initial count per path length
   double targetRelStdErr = 0;             // 0: a fixed size
-  uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength fresh candidates per length
-  // > 0: a budget instead of a target: the cost of totalCandidates of the chains' mutations (chainMixCost),
-  // the first round included. After it every length gets a first round's worth of fresh candidates (in
-  // whole randomization groups), then the length whose doubling removes most of b's predicted variance per
-  // unit of cost (largest s2_k / (f_k^2 cost_k): s2_k the first round's variance per candidate, f_k the
-  // fresh count, cost_k = candidateCost) doubles while the total cost stays within the budget, and what is
-  // left of it goes to that length in whole groups. Also with one length: it grows while it fits.
+  uint64_t maxGrowth = 1;                 // at most maxGrowth x candidatesPerLength per length
+  // > 0: a budget instead of a target: the cost of totalCandidates of the chains' mutations (chainMixCost).
+  // After the first round, the length whose doubling removes most of b's variance per unit of cost
+  // (largest se_k^2 / (n_k cost_k), cost_k = candidateCost) doubles, while the total cost stays within the
+  // budget. Also with one length: it doubles while it fits.
   uint64_t totalCandidates = 0;
   std::vector<int> pathLengths = {-1};  // pssmlt: {-1}; mmlt: {kMin, ..., kMax}
   uint64_t firstSlot = 0;                // slot of pathLengths[0] (a later block of lengths continues the slots)
@@ -89,7 +87,6 @@ inline uint64_t tailCandidates(uint64_t N) { return std::max<uint64_t>(kCandidat
 // kCandidateGroups randomization groups (i.i.d. if N is not a multiple of them), sample variance, and the
 // tail split at tau (develop.h (D3)).
 BootstrapEstimate summarizeCandidates(const std::vector<double>& c);
-BootstrapEstimate summarizeCandidates(const double* c, uint64_t n);
 
 struct LengthBootstrap {
   int pathLength = -1;
@@ -98,12 +95,8 @@ struct LengthBootstrap {
   std::vector<uint32_t> bin;  // film bin of each candidate (runBinnedBootstrap only; else empty)
   std::vector<uint32_t> work;  // numbers drawn by each candidate (runBinnedBootstrap only; else empty)
   std::vector<double> luminance;  // each candidate's luminance (BootstrapConfig::luminance), else empty
-  // The first candidate of the estimate: 0, or for a sized bootstrap the first fresh one (candidatesPerLength;
-  // the first round before it only sized the bootstrap and seeds chains).
-  uint64_t estimateFrom = 0;
-  // Over candidates [estimateFrom, c.size()): b (the mean), stdErr (from the kCandidateGroups group means),
-  // sampleVar (c's variance per candidate, i.i.d. formula: a uniform sample's variance) and the tail split of
-  // develop.h (D3): what the plan keeps.
+  // b (the mean), stdErr (from the kCandidateGroups group means), sampleVar (c's variance per candidate,
+  // i.i.d. formula: a uniform sample's variance) and the tail split of develop.h (D3): what the plan keeps.
   BootstrapEstimate estimate;
   BootstrapEstimate luminanceEstimate;  // the same summary of `luminance` (n = 0: not kept)
   AliasTable table;       // over c; empty if b == 0

@@ -25,11 +25,11 @@
 //
 // ---- b refined as the job runs ---------------------------------------------------------------------
 // b_k = integral over U of c_k(u) du. Two sets of samples of c_k estimate it:
-//  - the N_0 bootstrap candidates (of a sized bootstrap, the ones drawn after its first round fixed their
-//    count: bootstrap.h). Each is uniform on U on its own, but their film positions (Camera
+//  - the N_0 bootstrap candidates. Each is uniform on U on its own, but their film positions (Camera
 //    [0,1]) are a randomized Halton sequence in kCandidateGroups independent randomizations
 //    (sample_source.h), so the image's bright and dark regions are visited in proportion. Their mean b_0
-//    is unbiased (a count chosen by the values it averages would not be); its variance v_0 is estimated from the spread of the groups' means (the i.i.d. formula
+//    is unbiased for a fixed count (a budgeted bootstrap's counts follow its values, which biases b_0
+//    low on heavy tails: bootstrap.h); its variance v_0 is estimated from the spread of the groups' means (the i.i.d. formula
 //    would miss the gain: on the Cornell box with its light in view, 6x smaller standard error);
 //  - every large step of every chain of length k: it draws all of its coordinates afresh, independently
 //    of the chain's state, whether accepted or not, so its c(y) is an i.i.d. uniform sample. Their mean
