@@ -89,16 +89,19 @@ std::vector<Bin> wallBins(const PathSpace& space, int n) {
   return bins;
 }
 
-// A bin's share of N proposals (count) against the integral of T over it, estimated from M uniform points
-// in the bin (area A; sum and sum of squares of T): |difference| over its combined standard error, or
-// nullopt where fewer than 30 proposals are expected and seen (too few to compare).
-std::optional<double> binZ(uint64_t count, uint64_t N, double sum, double sq, int M, double A) {
+// A bin's share of N proposals (count), `got`, against the integral of T over it, `expect`, estimated from
+// M uniform points in the bin (area A; sum and sum of squares of T), and z = |got - expect| over their
+// combined standard error; nullopt where fewer than 30 proposals are expected and seen (too few to compare).
+struct BinComparison {
+  double got, expect, z;
+};
+std::optional<BinComparison> binZ(uint64_t count, uint64_t N, double sum, double sq, int M, double A) {
   const double mean = sum / M;
   const double expect = A * mean, seExpect = A * std::sqrt(std::max(0.0, sq / M - mean * mean) / (M - 1));
   const double got = double(count) / double(N);
   if (std::max(got, expect) * double(N) < 30) return std::nullopt;
   const double seGot = std::sqrt(std::max(got, expect) / double(N));
-  return std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect);
+  return BinComparison{got, expect, std::fabs(got - expect) / std::sqrt(seGot * seGot + seExpect * seExpect)};
 }
 
 struct Check {
@@ -141,14 +144,13 @@ Check checkDensity(const PathSpace& space, const veach::Mutation& move, const Pa
       sq += T * T;
     }
     c.inBins += count[b];
-    const std::optional<double> z = binZ(count[b], N, sum, sq, M, bins[b].area());
-    if (!z) continue;
+    const std::optional<BinComparison> cmp = binZ(count[b], N, sum, sq, M, bins[b].area());
+    if (!cmp) continue;
     if (singular && bins[b].contains(*singular)) continue;
     ++c.binsTested;
-    if (*z > c.maxZ) c.maxZ = *z;
-    if (*z > kZ)
-      std::printf("  bin %zu: proposals %.5g, integral of T %.5g (z = %.2f)\n", b, double(count[b]) / double(N),
-                  bins[b].area() * sum / M, *z);
+    if (cmp->z > c.maxZ) c.maxZ = cmp->z;
+    if (cmp->z > kZ)
+      std::printf("  bin %zu: proposals %.5g, integral of T %.5g (z = %.2f)\n", b, cmp->got, cmp->expect, cmp->z);
   }
   return c;
 }
@@ -358,11 +360,11 @@ TEST(VeachDensity, DeepLensPerturbationJointly) {
           sum += T;
           sq += T * T;
         }
-        const std::optional<double> z =
+        const std::optional<BinComparison> cmp =
             binZ(count[i2 * b1.size() + i1], N, sum, sq, M, b2[i2].area() * b1[i1].area());
-        if (!z) continue;
+        if (!cmp) continue;
         ++tested;
-        maxZ = std::max(maxZ, *z);
+        maxZ = std::max(maxZ, cmp->z);
       }
     }
     std::printf("deep lens perturbation%s: %d bin pairs tested, max z %.2f\n", withCosine ? "" : " (T without the cosine)",

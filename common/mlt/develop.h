@@ -29,8 +29,9 @@
 //    [0,1]) are a randomized Halton sequence in kCandidateGroups independent randomizations
 //    (sample_source.h), so the image's bright and dark regions are visited in proportion. Their mean b_0
 //    is unbiased for a fixed count (a budgeted bootstrap's counts follow its values, which biases b_0
-//    low on heavy tails: bootstrap.h); its variance v_0 is estimated from the spread of the groups' means (the i.i.d. formula
-//    would miss the gain: on the Cornell box with its light in view, 6x smaller standard error);
+//    low on heavy tails: bootstrap.h); its variance v_0 is estimated from the spread of the groups'
+//    means (the i.i.d. formula would miss the gain: on the Cornell box with its light in view, 6x smaller
+//    standard error);
 //  - every large step of every chain of length k: it draws all of its coordinates afresh, independently
 //    of the chain's state, whether accepted or not, so its c(y) is an i.i.d. uniform sample. Their mean
 //    b_L = S_L / N_L (S = sum of c, merged by addition) has variance sigma^2 / N_L, where sigma^2, the
