@@ -18,8 +18,9 @@
 // rare bright paths looks certain and stops small, one that caught them grows and dilutes them; on
 // cornell-spheres' mmlt the bootstrap's b was 3.7% low on average over 401 runs, the image 0.14%), and by the
 // same dilution they damp that tail: b_k from fresh candidates of a count fixed in advance was unbiased but
-// left one run in seven on caustic-mirror ruined by a single giant candidate (docs/CHAINS.md, "mmlt's
-// brightness on cornell-spheres"), so this rule stays until c's tail is lighter.
+// left 5 of 56 paired mmlt and rjmlt runs on caustic-mirror at over 6x the median error (this rule: none),
+// ruined by a single giant candidate (docs/CHAINS.md, "mmlt's brightness on cornell-spheres"), so this rule
+// stays until c's tail is lighter.
 //
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
