@@ -255,6 +255,7 @@ v1::JobPlan toProto(const JobPlan& plan) {
   for (uint64_t v : plan.norm.mutationsPerLength) n->add_mutations_per_length(v);
   n->set_total_mutations(plan.norm.totalMutations);
   n->set_bootstrap_samples(plan.norm.bootstrapSamples);
+  n->set_bootstrap_samples_in_b(plan.norm.bootstrapSamplesInB);
   n->set_bootstrap_seconds(plan.norm.bootstrapSeconds);
   if (plan.norm.directShare >= 0) {
     n->set_direct_share(plan.norm.directShare);
@@ -310,6 +311,10 @@ JobPlan fromProto(const v1::JobPlan& p) {
   plan.norm.mutationsPerLength.assign(n.mutations_per_length().begin(), n.mutations_per_length().end());
   plan.norm.totalMutations = n.total_mutations();
   plan.norm.bootstrapSamples = n.bootstrap_samples();
+  plan.norm.bootstrapSamplesInB = n.has_bootstrap_samples_in_b() ? n.bootstrap_samples_in_b() : n.bootstrap_samples();
+  if (plan.norm.bootstrapSamplesInB > plan.norm.bootstrapSamples)
+    throw WireError("plan.norm.bootstrap_samples_in_b",
+                    fmt::format("{} exceeds bootstrap_samples {}", plan.norm.bootstrapSamplesInB, plan.norm.bootstrapSamples));
   plan.norm.bootstrapSeconds = n.bootstrap_seconds();
   if (n.has_direct_share()) {
     if (!(n.direct_share() >= 0 && n.direct_share() <= 1))

@@ -335,5 +335,26 @@ TEST(FarmLayer, TheTargetPowerTravelsWithThePlanAndABadOneIsRefused) {
   }
 }
 
+// The count of candidates b is developed from (Normalization::bootstrapSamplesInB, bootstrap.h fixedCount)
+// travels with the plan; a plan without it (from before it) holds every candidate; more than the bootstrap
+// drew is refused, naming the field.
+TEST(FarmLayer, TheCandidatesInBTravelWithThePlanAndTooManyAreRefused) {
+  JobPlan plan = chainPlan(8, 6, 4, 16);
+  plan.norm.bootstrapSamples = 4096;
+  plan.norm.bootstrapSamplesInB = 1024;
+  EXPECT_EQ(wire::parseJobPlan(wire::jobPlanBytes(plan)).norm.bootstrapSamplesInB, 1024u);
+  v1::JobPlan old = wire::toProto(plan);
+  old.mutable_norm()->clear_bootstrap_samples_in_b();
+  EXPECT_EQ(wire::fromProto(old).norm.bootstrapSamplesInB, 4096u);
+  v1::JobPlan bad = wire::toProto(plan);
+  bad.mutable_norm()->set_bootstrap_samples_in_b(4097);
+  try {
+    wire::fromProto(bad);
+    ADD_FAILURE() << "more candidates in b than the bootstrap drew were accepted";
+  } catch (const wire::WireError& e) {
+    EXPECT_EQ(e.field(), "plan.norm.bootstrap_samples_in_b");
+  }
+}
+
 }  // namespace
 }  // namespace mlt::farm

@@ -305,7 +305,7 @@ TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
       EXPECT_EQ(large.n, rb.steps("large"));
       EXPECT_LE(rb.bStdErr, std::min(rb.bBootstrapStdErr, largeOnly));
     }
-    EXPECT_EQ(rb.bSamples, big.norm.bootstrapSamples + rb.steps("large"));
+    EXPECT_EQ(rb.bSamples, big.norm.bootstrapSamplesInB + rb.steps("large"));
   }
 }
 
@@ -463,7 +463,7 @@ TEST(BootstrapSize, VagueBWarningNamesTheRemedyOfTheMethod) {
   ChainReport r;
   r.b = 1;
   r.bStdErr = 2 * kMaxRelativeStdErrB;
-  r.bootstrapSamples = 4096;
+  r.bootstrapSamples = r.bootstrapSamplesInB = 4096;
   r.bSamples = 100000;
   r.kinds = {{"bidir", 10, 5}, {"lens", 10, 5}};  // veach-mlt: no large steps
   EXPECT_NE(chainWarnings(r).find("refined as the chains run"), std::string::npos) << chainWarnings(r);
@@ -474,6 +474,13 @@ TEST(BootstrapSize, VagueBWarningNamesTheRemedyOfTheMethod) {
   EXPECT_NE(formatChainSummary(r, 1, 1).find("large steps"), std::string::npos) << formatChainSummary(r, 1, 1);
   r.bSamples = r.bootstrapSamples;  // nothing from the chains
   EXPECT_NE(chainWarnings(r).find("--bootstrap"), std::string::npos) << chainWarnings(r);
+  // Several lengths sized by their values: b holds the first round only, and the summary says so.
+  EXPECT_EQ(formatChainSummary(r, 1, 1).find("first round"), std::string::npos) << formatChainSummary(r, 1, 1);
+  r.bootstrapSamplesInB = 1024;
+  r.bSamples = 1024;
+  EXPECT_NE(formatChainSummary(r, 1, 1).find("1024 bootstrap candidates (the first round of 4096"), std::string::npos)
+      << formatChainSummary(r, 1, 1);
+  EXPECT_NE(chainWarnings(r).find("bootstrap's 1024 samples"), std::string::npos) << chainWarnings(r);
 }
 
 }  // namespace

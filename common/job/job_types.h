@@ -45,6 +45,9 @@ struct Normalization {
   std::vector<uint64_t> mutationsPerLength;  // mmlt: total planned mutations per length
   uint64_t totalMutations = 0;
   uint64_t bootstrapSamples = 0;
+  // Of those, the candidates whose values the image's b is developed from (bootstrapB; bootstrap.h,
+  // LengthBootstrap::fixedCount): a multi-length sizing's first round. The rest only seed and allocate.
+  uint64_t bootstrapSamplesInB = 0;
   double bootstrapSeconds = 0;
   // The direct-light pilot of a job whose settings left the choice to the plan (DirectLight::Auto,
   // common/job/direct_light_rule.h): its share and CV; -1 where no pilot ran (the CV also where the share

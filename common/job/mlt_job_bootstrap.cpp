@@ -174,6 +174,11 @@ void finishLengthOne(const ChainJobSpec& spec, const BootstrapConfig& bc, const 
                                                      counted.stdErr * counted.stdErr + final.stdErr * final.stdErr));
   }
   l1.estimate = final;
+  if (e1.estimated) {  // the rays' count is fixed in advance: b_1 is developed from them, not the candidates
+    l1.fixedCount = 0;
+    l1.fixedEstimate = final;
+    l1.fixedLuminanceEstimate = l1.luminanceEstimate;
+  }
 }
 
 // Unlimited depth: one more block of lengths while the last one carried more than kNegligibleLengthShare of b

@@ -118,8 +118,9 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
       norm.bkStdErr[slot] = lb.estimate.stdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
-    norm.bootstrapB[slot] = lb.estimate;
-    if (norm.target().shaped()) norm.bootstrapLuminance[slot] = lb.luminanceEstimate;
+    norm.bootstrapB[slot] = lb.fixedEstimate;  // unbiased (bootstrap.h): the image's b starts from it
+    norm.bootstrapSamplesInB += lb.fixedCount;
+    if (norm.target().shaped()) norm.bootstrapLuminance[slot] = lb.fixedLuminanceEstimate;
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);
     for (uint64_t j = 0; j < chains; ++j) {

@@ -75,8 +75,9 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.directShare = norm.directShare;
   r.directCv = norm.directCv;
   r.bootstrapSamples = norm.bootstrapSamples;
+  r.bootstrapSamplesInB = norm.bootstrapSamplesInB;
   for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;  // the independent proposals
-  r.bSamples += norm.bootstrapSamples;
+  r.bSamples += norm.bootstrapSamplesInB;
   r.mutations = merged.samples;
   r.mutationsPerPixel = s.mutationsPerPixel;
   r.hasAcceptance = true;
@@ -132,6 +133,7 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["b"] = r.b;
   m.numbers["bStdErr"] = r.bStdErr;
   m.numbers["bootstrapSamples"] = double(r.bootstrapSamples);
+  m.numbers["bootstrapSamplesInB"] = double(r.bootstrapSamplesInB);
   m.numbers["bBootstrap"] = r.bBootstrap;
   m.numbers["bBootstrapStdErr"] = r.bBootstrapStdErr;
   m.numbers["bSamples"] = double(r.bSamples);
@@ -191,6 +193,9 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.b = number(m, "b");
   r.bStdErr = number(m, "bStdErr");
   r.bootstrapSamples = uint64_t(number(m, "bootstrapSamples"));
+  // An image from before the key: b held every candidate.
+  r.bootstrapSamplesInB = m.numbers.count("bootstrapSamplesInB") ? uint64_t(number(m, "bootstrapSamplesInB"))
+                                                                 : r.bootstrapSamples;
   r.bBootstrap = number(m, "bBootstrap");
   r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
   if (m.numbers.count("directLightShare")) {
@@ -250,9 +255,11 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
 std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, double chainSeconds,
                                const std::string& secondsNote) {
   std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.3f}%, from {} samples: {} bootstrap candidates", r.b,
-                                r.bStdErr, 100 * r.relativeStdErr(), r.bSamples, r.bootstrapSamples);
+                                r.bStdErr, 100 * r.relativeStdErr(), r.bSamples, r.bootstrapSamplesInB);
+  if (r.bootstrapSamplesInB < r.bootstrapSamples)  // bootstrap.h, fixedCount
+    out += fmt::format(" (the first round of {}: the others' count followed their values)", r.bootstrapSamples);
   out += bootstrapSeconds >= 0 ? fmt::format(" in {:.2f} s", bootstrapSeconds) : "";
-  if (r.bSamples <= r.bootstrapSamples)
+  if (r.bSamples <= r.bootstrapSamplesInB)
     out += "; none from the chains)\n";
   else
     out += r.steps("large") > 0 ? " + the chains' large steps)\n" : " + the chains' independent samples)\n";
@@ -313,12 +320,12 @@ std::string chainWarnings(const ChainReport& r) {
   if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
   const bool largeSteps = r.steps("large") > 0;
   const std::string remedy =
-      r.bSamples > r.bootstrapSamples
+      r.bSamples > r.bootstrapSamplesInB
           ? fmt::format("render more mutations (b is refined as the chains run: now {} samples){}", r.bSamples,
                         largeSteps ? " or raise --large-step" : "")
           : fmt::format("no chain refined b, so it is the bootstrap's {} samples: render more mutations or set a "
                         "larger --bootstrap",
-                        r.bootstrapSamples);
+                        r.bootstrapSamplesInB);
   return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
                      "as uncertain: {}\n",
                      100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, remedy);

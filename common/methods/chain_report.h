@@ -7,7 +7,8 @@
 // Metadata keys (numbers; all are functions of the plan and the chains, never of the wall clock):
 //   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with; with a relative
 //   target, common/mlt/importance.h, the luminance b_lum each length is scaled to, develop.h (D8)), bBootstrap,
-//   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
+//   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapSamplesInB (those b holds: bootstrap.h, fixedCount),
+//   bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
 //   largeStepProb, separateDirect (0/1: the plan's choice) and with it directSpp (the pass's samples
@@ -56,7 +57,8 @@ struct ChainReport {
   double bBootstrap = 0, bBootstrapStdErr = 0;  // the bootstrap's alone (it allocated the chains)
   double directShare = -1, directCv = -1;       // the direct-light pilot's (Normalization); -1: none ran
   uint64_t bootstrapSamples = 0;              // bootstrap candidates (all lengths)
-  uint64_t bSamples = 0;                      // samples b was pooled from (candidates + large steps)
+  uint64_t bootstrapSamplesInB = 0;           // of those, the ones b is developed from (Normalization)
+  uint64_t bSamples = 0;                      // samples b was pooled from (those candidates + large steps)
   uint64_t chains = 0, mutations = 0;
   double mutationsPerPixel = 0;
   bool hasAcceptance = false;  // false: an image whose metadata does not carry the acceptance keys

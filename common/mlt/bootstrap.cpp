@@ -131,6 +131,11 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
     result.lengths.push_back(std::move(lb));
     reduce(l);
   }
+  // Which sizing decisions below can depend on the candidates' values: the target's always; the budget's
+  // only with several growable lengths (one length doubles while its first round's cost fits).
+  size_t growable = 0;
+  for (size_t l = 0; l < config.pathLengths.size(); ++l) growable += seedOnly(l) ? 0 : 1;
+  const bool valueSized = config.totalCandidates > 0 ? growable > 1 : config.targetRelStdErr > 0;
   if (config.totalCandidates > 0) {
     // Budgeted sizing, in cost (numbers drawn; all lengths alike for an unbinned bootstrap): the budget is
     // totalCandidates candidates of the chains' mix, as the first round measures it. Double the length
@@ -182,6 +187,17 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   double var = 0;
   for (size_t l = 0; l < result.lengths.size(); ++l) {
     LengthBootstrap& lb = result.lengths[l];
+    lb.fixedCount = valueSized ? std::min<uint64_t>(N0, lb.c.size()) : lb.c.size();
+    if (lb.fixedCount == lb.c.size()) {
+      lb.fixedEstimate = lb.estimate;
+      lb.fixedLuminanceEstimate = lb.luminanceEstimate;
+    } else {
+      const auto first = [&](const std::vector<double>& v) {
+        return std::vector<double>(v.begin(), v.begin() + std::ptrdiff_t(lb.fixedCount));
+      };
+      lb.fixedEstimate = summarizeCandidates(first(lb.c));
+      if (!lb.luminance.empty()) lb.fixedLuminanceEstimate = summarizeCandidates(first(lb.luminance));
+    }
     if (lb.estimate.b > 0) lb.table = AliasTable(lb.c);
     result.b += lb.estimate.b;
     var += varMean[l];

@@ -20,7 +20,9 @@
 // same dilution they damp that tail: b_k from fresh candidates of a count fixed in advance was unbiased but
 // left 5 of 56 paired mmlt and rjmlt runs on caustic-mirror at over 6x the median error (this rule: none),
 // ruined by a single giant candidate (docs/CHAINS.md, "mmlt's brightness on cornell-spheres"), so this rule
-// stays until c's tail is lighter.
+// stays for what the estimate decides: the chains' allocation, starts and Kelemen weights. The image's b
+// is developed from the first round alone (LengthBootstrap::fixedEstimate), whose count no value decided:
+// unbiased, and the large steps outnumber it anyway (develop.h (D3)).
 //
 // Determinism: candidates are evaluated in parallel (TBB) into an array; every reduction (b, variance,
 // alias table) then runs sequentially in index order, so the result is bit-identical for any thread count.
@@ -100,6 +102,14 @@ struct LengthBootstrap {
   // i.i.d. formula: a uniform sample's variance) and the tail split of develop.h (D3): what the plan keeps.
   BootstrapEstimate estimate;
   BootstrapEstimate luminanceEstimate;  // the same summary of `luminance` (n = 0: not kept)
+  // The same two summaries of the first fixedCount candidates only: those whose count no candidate's value
+  // decided (the first round of a sizing that grows lengths by their values; every candidate where only
+  // the cost grows them, as with one length). Their mean is unbiased, which `estimate`'s is not where the
+  // sizing grew lengths by their values (see Sizing above): the image's b is developed from these
+  // (develop.h (D3)), while `estimate` (more candidates, its heavy tail damped) allocates the chains and
+  // weights Kelemen MIS, where a bias costs efficiency, not brightness.
+  uint64_t fixedCount = 0;
+  BootstrapEstimate fixedEstimate, fixedLuminanceEstimate;
   AliasTable table;       // over c; empty if b == 0
 };
 

@@ -25,13 +25,15 @@
 //
 // ---- b refined as the job runs ---------------------------------------------------------------------
 // b_k = integral over U of c_k(u) du. Two sets of samples of c_k estimate it:
-//  - the N_0 bootstrap candidates. Each is uniform on U on its own, but their film positions (Camera
+//  - N_0 bootstrap candidates. Each is uniform on U on its own, but their film positions (Camera
 //    [0,1]) are a randomized Halton sequence in kCandidateGroups independent randomizations
 //    (sample_source.h), so the image's bright and dark regions are visited in proportion. Their mean b_0
-//    is unbiased for a fixed count (a budgeted bootstrap's counts follow its values, which biases b_0
-//    low on heavy tails: bootstrap.h); its variance v_0 is estimated from the spread of the groups'
-//    means (the i.i.d. formula would miss the gain: on the Cornell box with its light in view, 6x smaller
-//    standard error);
+//    is unbiased for a count fixed in advance; a budgeted bootstrap of several lengths grows each by its
+//    values after the first round (optional stopping: b_0 of all of them leaned low, by 3.7% on
+//    cornell-spheres' mmlt), so N_0 is the first round's (bootstrap.h, LengthBootstrap::fixedCount; one
+//    length keeps every candidate, its doublings depend on cost alone); its variance v_0 is estimated
+//    from the spread of the groups' means (the i.i.d. formula would miss the gain: on the Cornell box
+//    with its light in view, 6x smaller standard error);
 //  - every large step of every chain of length k: it draws all of its coordinates afresh, independently
 //    of the chain's state, whether accepted or not, so its c(y) is an i.i.d. uniform sample. Their mean
 //    b_L = S_L / N_L (S = sum of c, merged by addition) has variance sigma^2 / N_L, where sigma^2, the
