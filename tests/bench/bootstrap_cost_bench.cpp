@@ -30,7 +30,6 @@ namespace {
 
 constexpr int kRes = 256;
 constexpr int kDepth = 12;
-constexpr double kCandidateCostBase = 0;  // TEMP
 
 double threadNs() {
   timespec ts;
