@@ -215,6 +215,46 @@ TEST(Bdpt, WeightedTechniquesOfOneLengthSumToTheReference) {
   EXPECT_LT(test::maxZ(sum, ref), kZ);
 }
 
+// evaluateLength (mmlt's b sample over every technique) is, sample by sample, the sum over s of what
+// evaluateTechnique(s, k + 1 - s) gives on the same numbers, weighted: its shared subpaths' prefixes are each
+// technique's subpaths. Scenes with mirror and glass (Dirac vertices inside the subpaths) and a cone-sampled
+// sphere light (s = 1's density ratio); lengths 1 to 6; most samples carry light by several techniques.
+TEST(Bdpt, EvaluateLengthSumsEveryTechniqueOnTheSameNumbers) {
+  for (const SceneDesc& desc : {test::cornellBoxSpecular(16, 12), test::cornellBoxSphereLight(16, 12)}) {
+    const auto scene = RenderScene::build(desc);
+    BdptWorkspace shared, single;
+    for (int k = 1; k <= 6; ++k) {
+      int lit = 0, several = 0;
+      for (uint64_t i = 0; i < 3000; ++i) {
+        IndependentSource source(77 + uint64_t(k), i);
+        const Color all = evaluateLength(*scene, source, k, MisHeuristic::Power, shared);
+        Color sum;
+        int techniques = 0;
+        for (int s = 0; s <= k; ++s) {
+          if (k == 1 && s == 1) continue;  // (1, 1) is lt's alone
+          IndependentSource again(77 + uint64_t(k), i);
+          const TechniqueSample ts = evaluateTechnique(*scene, again, s, k + 1 - s, MisHeuristic::Power, single);
+          if (ts.weight > 0 && !ts.C.isBlack()) {
+            sum += ts.C * ts.weight;
+            ++techniques;
+          }
+        }
+        const float scale = std::max({sum.r, sum.g, sum.b, 1e-30f});
+        ASSERT_NEAR(all.r, sum.r, 1e-5f * scale) << "k " << k << ", sample " << i;
+        ASSERT_NEAR(all.g, sum.g, 1e-5f * scale) << "k " << k << ", sample " << i;
+        ASSERT_NEAR(all.b, sum.b, 1e-5f * scale) << "k " << k << ", sample " << i;
+        lit += sum.isBlack() ? 0 : 1;
+        several += techniques > 1 ? 1 : 0;
+      }
+      std::printf("k=%d: %d of 3000 samples carry light, %d by several techniques\n", k, lit, several);
+      EXPECT_GT(lit, k == 1 ? 10 : 100) << "k " << k;  // k = 1: the light seen directly, small in one scene
+      if (k >= 2) {
+        EXPECT_GT(several, 50) << "k " << k;
+      }
+    }
+  }
+}
+
 // The same with a cone-sampled sphere light, for k = 2 and 3 (s = 1's weight carries misWeight's k).
 TEST(Bdpt, WeightedTechniquesSumToTheReferenceWithAConeSampledSphereLight) {
   const auto scene = RenderScene::build(test::cornellBoxSphereLight(16, 12));

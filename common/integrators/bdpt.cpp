@@ -352,4 +352,26 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
   return r;
 }
 
+Color evaluateLength(const RenderScene& scene, SampleSource& source, int k, MisHeuristic heuristic,
+                     BdptWorkspace& ws) {
+  if (k < 1) return {};
+  ws.reserve(k + 1, std::max(k, 1));
+  Vec2 pRaster;
+  const int nc = generateCameraSubpath(scene, source, nullptr, k + 1, -1, ws.camera.data(), &pRaster);
+  const int nl = k >= 2 ? generateLightSubpath(scene, source, k, -1, ws.light.data()) : 0;
+  Color sum;
+  for (int s = 0; s <= k; ++s) {
+    const int t = k + 1 - s;
+    if (s + t == 2 && s > 0) continue;  // (1, 1): lt's alone, weight 0 (misWeight)
+    if ((t >= 2 && nc < t) || (s >= 2 && nl < s)) continue;  // a subpath ended early
+    Vertex sampled;
+    Vec2 p = pRaster;
+    const Color C = connectBdpt(scene, source, ws.light.data(), s, ws.camera.data(), t, &sampled, &p);
+    if (C.isBlack() || !C.isFinite()) continue;
+    const float w = misWeight(scene, ws.light.data(), s, ws.camera.data(), t, sampled, heuristic);
+    sum += C * w;
+  }
+  return sum;
+}
+
 }  // namespace mlt

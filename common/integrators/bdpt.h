@@ -134,4 +134,13 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
                                   MisHeuristic heuristic, BdptWorkspace& ws, const Vec2* pixel = nullptr,
                                   Vertex* sampledOut = nullptr);
 
+// Every technique of path length k (s + t = k + 1, t >= 1) on the same numbers, MIS-weighted and summed:
+// sum_s w_{s,t} C_{s,t}, each term what evaluateTechnique(s, t) returns for this source (the subpaths are
+// traced once, k + 1 camera and k light vertices, and their prefixes are each technique's subpaths: a
+// vertex's numbers do not depend on how long its subpath is). With mmlt's target c_k = n w lum(C) for the
+// technique chosen by a coordinate the others do not read, luminance of this is E[c_k | the other
+// coordinates]: the same mean b_k, a variance no larger (Rao-Blackwell; tests/bench/b_estimator_bench.cpp).
+Color evaluateLength(const RenderScene& scene, SampleSource& source, int k, MisHeuristic heuristic,
+                     BdptWorkspace& ws);
+
 }  // namespace mlt

@@ -10,8 +10,10 @@
 // the heavy tail the results page's brightness shows there (docs/CHAINS.md). This measures, per path length k
 // on the bundled scenes at 256x256 and their own depth: the mean of c and of c^ over the same N uniform samples
 // (they must agree: a check of (B2)), each one's variance per sample, the share of b in the top 0.1% of the
-// samples (the tail), the thread CPU time per sample, and the efficiency ratio
-// (Var c x time c) / (Var c^ x time c^): above 1, a b sample by (B2) is worth its cost.
+// samples (the tail), the thread CPU time per sample (c^ by evaluateLength: one camera and one light subpath,
+// every connection), and the efficiency ratio (Var c x time c) / (Var c^ x time c^): above 1, a b sample by
+// (B2) is worth its cost. Heavy tails make both sample variances unreliable: c's understates its tail where c^
+// meets a giant term that c draws once in n (docs/CHAINS.md).
 // Run: build/tests/b_estimator_bench [samples per length, default 100000]
 #include <algorithm>
 #include <cmath>
@@ -74,7 +76,6 @@ void measure(const std::string& name, uint64_t N) {
   std::printf("%3s %12s %12s %9s %11s %11s %8s %8s %8s %8s %10s\n", "k", "mean c", "mean c^", "c^/c - 1",
               "var c", "var c^", "top c", "top c^", "ns c", "ns c^", "efficiency");
   for (int k = 2; k <= integrator.maxDepth; ++k) {
-    const int n = mmltTechniqueCount(k);
     Stats c, ch;
     c.v.resize(N);
     ch.v.resize(N);
@@ -87,14 +88,9 @@ void measure(const std::string& name, uint64_t N) {
     }
     c.ns = (threadNs() - t0) / double(N);
     t0 = threadNs();
-    for (uint64_t i = 0; i < N; ++i) {  // (B2): every technique on the same numbers
-      double sum = 0;
-      for (int s = 0; s < n; ++s) {
-        IndependentSource source = IndependentSource::candidate(7, first + i);
-        const TechniqueSample ts = evaluateTechnique(*scene, source, s, k + 1 - s, integrator.heuristic, ws);
-        if (ts.weight > 0 && !ts.C.isBlack()) sum += double(ts.weight) * luminance(ts.C);
-      }
-      ch.v[i] = sum;
+    for (uint64_t i = 0; i < N; ++i) {  // (B2): every technique on the same numbers, the subpaths traced once
+      IndependentSource source = IndependentSource::candidate(7, first + i);
+      ch.v[i] = luminance(evaluateLength(*scene, source, k, integrator.heuristic, ws));
     }
     ch.ns = (threadNs() - t0) / double(N);
     const double mc = c.mean(), mh = ch.mean();
