@@ -257,7 +257,7 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
   std::string out = fmt::format("b = {:.6g} ± {:.3g} (rel. {:.3f}%, from {} samples: {} bootstrap candidates", r.b,
                                 r.bStdErr, 100 * r.relativeStdErr(), r.bSamples, r.bootstrapSamplesInB);
   if (r.bootstrapSamplesInB < r.bootstrapSamples)  // bootstrap.h, fixedCount
-    out += fmt::format(" (the first round of {}: the others' count followed their values)", r.bootstrapSamples);
+    out += fmt::format(" (of {} drawn: the others only seed and allocate the chains)", r.bootstrapSamples);
   out += bootstrapSeconds >= 0 ? fmt::format(" in {:.2f} s", bootstrapSeconds) : "";
   if (r.bSamples <= r.bootstrapSamplesInB)
     out += "; none from the chains)\n";

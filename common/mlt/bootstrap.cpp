@@ -15,9 +15,10 @@
 
 namespace mlt {
 
-BootstrapEstimate summarizeCandidates(const std::vector<double>& c) {
+BootstrapEstimate summarizeCandidates(const std::vector<double>& c) { return summarizeCandidates(c.data(), c.size()); }
+
+BootstrapEstimate summarizeCandidates(const double* c, uint64_t N) {
   BootstrapEstimate e;
-  const uint64_t N = c.size();
   e.n = N;
   if (N == 0) return e;
   double sum = 0;
@@ -44,7 +45,7 @@ BootstrapEstimate summarizeCandidates(const std::vector<double>& c) {
   // The tail split (develop.h (D3)): tau = the tailCandidates(N)-th largest c.
   const uint64_t m = tailCandidates(N);
   if (N > 2 * m) {
-    std::vector<double> sorted = c;
+    std::vector<double> sorted(c, c + N);
     std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(N - m), sorted.end());
     e.tau = sorted[N - m];
   }
@@ -133,9 +134,9 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
   }
   // Which sizing decisions below can depend on the candidates' values: the target's always; the budget's
   // only with several growable lengths (one length doubles while its first round's cost fits).
-  size_t growable = 0;
-  for (size_t l = 0; l < config.pathLengths.size(); ++l) growable += seedOnly(l) ? 0 : 1;
-  const bool valueSized = config.totalCandidates > 0 ? growable > 1 : config.targetRelStdErr > 0;
+  size_t growableLengths = 0;
+  for (size_t l = 0; l < config.pathLengths.size(); ++l) growableLengths += seedOnly(l) ? 0 : 1;
+  const bool valueSized = config.totalCandidates > 0 ? growableLengths > 1 : config.targetRelStdErr > 0;
   if (config.totalCandidates > 0) {
     // Budgeted sizing, in cost (numbers drawn; all lengths alike for an unbinned bootstrap): the budget is
     // totalCandidates candidates of the chains' mix, as the first round measures it. Double the length
@@ -192,11 +193,8 @@ BootstrapResult bootstrapImpl(const BootstrapConfig& config, const BinnedCandida
       lb.fixedEstimate = lb.estimate;
       lb.fixedLuminanceEstimate = lb.luminanceEstimate;
     } else {
-      const auto first = [&](const std::vector<double>& v) {
-        return std::vector<double>(v.begin(), v.begin() + std::ptrdiff_t(lb.fixedCount));
-      };
-      lb.fixedEstimate = summarizeCandidates(first(lb.c));
-      if (!lb.luminance.empty()) lb.fixedLuminanceEstimate = summarizeCandidates(first(lb.luminance));
+      lb.fixedEstimate = summarizeCandidates(lb.c.data(), lb.fixedCount);
+      if (!lb.luminance.empty()) lb.fixedLuminanceEstimate = summarizeCandidates(lb.luminance.data(), lb.fixedCount);
     }
     if (lb.estimate.b > 0) lb.table = AliasTable(lb.c);
     result.b += lb.estimate.b;

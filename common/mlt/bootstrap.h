@@ -90,6 +90,7 @@ inline uint64_t tailCandidates(uint64_t N) { return std::max<uint64_t>(kCandidat
 // kCandidateGroups randomization groups (i.i.d. if N is not a multiple of them), sample variance, and the
 // tail split at tau (develop.h (D3)).
 BootstrapEstimate summarizeCandidates(const std::vector<double>& c);
+BootstrapEstimate summarizeCandidates(const double* c, uint64_t n);  // the first n of an array (a prefix)
 
 struct LengthBootstrap {
   int pathLength = -1;
