@@ -268,6 +268,63 @@ TEST(RefinedB, LargeStepsSampleTheTargetLikeTheBootstrap) {
   }
 }
 
+TEST(RefinedB, RaoBlackwellizedBSamplesRefineTheLengthsOfSeveralTechniques) {
+  // --b-sample-every N (develop.h (D9)): every length of several techniques is refined by ceil(M / N) b
+  // samples per chain instead of its large steps (length 1, one technique, keeps them), the plan keeps no
+  // bootstrap estimate for those lengths, the samples' mean agrees with b_k from 65536 bootstrap candidates
+  // (c, other numbers) within their combined error, their variance per sample is below c's (Rao-Blackwell),
+  // and a chain gives the same bits twice.
+  for (std::string m : {"mmlt", "rjmlt"}) {
+    RenderSettings s = settingsFor(m, 21, 256);
+    s.bootstrapSamples = 1 << 16;
+    const JobPlan plain = planJob(cornell(), s);
+    s.params["b-sample-every"] = "4";
+    const JobPlan plan = planJob(cornell(), s);
+    ASSERT_EQ(plan.norm.mutationsPerLength, plain.norm.mutationsPerLength) << m << ": the same bootstrap and chains";
+    std::vector<uint64_t> expected(plan.norm.mutationsPerLength.size(), 0);
+    for (const WorkUnit& u : plan.units) expected[size_t(u.pathLength)] += (u.mutations + 3) / 4;
+    const PartialResult merged = runJob(plan);
+    ASSERT_EQ(merged.stats.largeStepSums.size(), plan.norm.bootstrapB.size()) << m;
+    int powerful = 0;
+    for (size_t k = 1; k < plan.norm.mutationsPerLength.size(); ++k) {
+      const TargetSums& L = merged.stats.largeStepSums[k];
+      const BootstrapEstimate& boot = plain.norm.bootstrapB[k];
+      if (plan.norm.mutationsPerLength[k] == 0) continue;
+      if (k == 1) {  // one technique: the large steps, and the bootstrap's estimate
+        EXPECT_EQ(plan.norm.bootstrapB[k], plain.norm.bootstrapB[k]) << m;
+        EXPECT_EQ(L.n, merged.stats.proposedPerLengthKind[k * ChainStats::kKindStride + int(MutationType::Large)]) << m;
+        continue;
+      }
+      EXPECT_EQ(plan.norm.bootstrapB[k].n, 0u) << m << " k " << k << ": b_k from the b samples alone";
+      EXPECT_EQ(L.n, expected[k]) << m << " k " << k << ": ceil(M / 4) per chain";
+      const BEstimate hat = pooledB({}, L);
+      const double se = std::hypot(hat.stdErr, boot.stdErr);
+      EXPECT_LT(std::fabs(hat.b - boot.b), 5 * se) << m << " k " << k << ": b samples " << hat.b << " +- "
+                                                    << hat.stdErr << ", bootstrap " << boot.b << " +- " << boot.stdErr;
+      if (5 * se < 0.3 * boot.b) ++powerful;
+      const double n = double(L.n), varHat = (L.sumSq - n * hat.b * hat.b) / (n - 1);
+      EXPECT_LT(varHat, boot.sampleVar) << m << " k " << k << ": Var c^ " << varHat << " vs Var c " << boot.sampleVar;
+      std::printf("%s k=%zu: b samples %.5g +- %.2g (%llu), bootstrap %.5g +- %.2g; Var c^ / Var c = %.3f\n", m.c_str(),
+                  k, hat.b, hat.stdErr, (unsigned long long)L.n, boot.b, boot.stdErr, varHat / boot.sampleVar);
+    }
+    EXPECT_GE(powerful, 2) << m << ": the comparison is too weak to fail";
+    const ChainReport report = makeChainReport(plan, merged);
+    EXPECT_EQ(report.bSampleEvery, 4u);
+    EXPECT_EQ(makeChainReport(plain, PartialResult{}).bSampleEvery, 0u);
+    EXPECT_NE(formatChainSummary(report, -1, -1, "").find("one fresh point per 4 mutations"), std::string::npos);
+    ImageMetadata md;
+    addChainMetadata(report, md);
+    EXPECT_EQ(chainReportFromMetadata(md).bSampleEvery, 4u) << "the stride travels with the image";
+    // Deterministic: a chain of length >= 2 run twice gives the same sums, bit for bit.
+    for (const WorkUnit& u : plan.units)
+      if (u.pathLength >= 2) {
+        const PartialResult a = runWorkUnit(cornell(), plan, u), b = runWorkUnit(cornell(), plan, u);
+        EXPECT_EQ(a.stats.largeStepSums, b.stats.largeStepSums) << m;
+        break;
+      }
+  }
+}
+
 TEST(RefinedB, StandardErrorShrinksAsTheJobGrows) {
   // Same bootstrap, 64x the mutations: b's standard error falls below the bootstrap's and keeps falling as
   // the job grows, and the combination is never worse than either of its parts (develop.h (D5)).

@@ -35,11 +35,12 @@ TEST(RjmltMethod, IsRegisteredWithItsKindsAndParams) {
   EXPECT_TRUE(isMarkovChainMethod("rjmlt"));
   EXPECT_EQ(mutationKindNames("rjmlt"), (std::vector<std::string>{"large", "small", "technique"}));
   const auto params = findMethod("rjmlt").params();  // the family's target parameters, then its own
-  ASSERT_EQ(params.size(), 4u);
+  ASSERT_EQ(params.size(), 5u);
   EXPECT_EQ(params[0].name, "target");
   EXPECT_EQ(params[1].name, "target-floor");
   EXPECT_EQ(params[2].name, "target-power");
   EXPECT_EQ(params[3].name, "technique-step");
+  EXPECT_EQ(params[4].name, "b-sample-every");  // mmlt's (mmlt_method.h, develop.h (D9))
   RenderSettings s;
   s.method = "rjmlt";
   s.largeStepProb = 0.97f;

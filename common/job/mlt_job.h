@@ -80,6 +80,14 @@ class ChainJobSpec {
     (void)settings;
     return std::nullopt;
   }
+  // Mutations per Rao-Blackwellized b sample of path length k (PssTarget::bSample, develop.h (D9)): each chain
+  // of length k draws ceil(mutations / this) of them, and b_k is refined by them instead of its large steps'
+  // c. 0 (the default): by the large steps. Used only with the luminance target (a shaped target's
+  // brightness comes from b_lum, develop.h (D8)); see bSampleStride.
+  virtual uint64_t mutationsPerBSample(const RenderSettings& settings, int pathLength) const {
+    (void)settings, (void)pathLength;
+    return 0;
+  }
   // The relative target's floor kappa (common/mlt/importance.h (R2)): > 0, the bootstrap makes an importance
   // map by a pilot (importance_pilot.h) and the target weights each splat's luminance by it; 0 (the
   // default), the target is the path's luminance. veach-mlt keeps 0: its chains compute their own target.
@@ -98,6 +106,13 @@ class ChainJobSpec {
 // The shortest path length a per-length method's chains cover: 1, or directPassSegments + 1 when the
 // direct pass renders the shorter ones (separateDirect).
 int chainMinLength(const RenderSettings& settings);
+
+// Mutations per Rao-Blackwellized b sample of path length k in this plan (ChainJobSpec::mutationsPerBSample;
+// develop.h (D9)): 0 where b_k is refined by the large steps (a shaped target, or the method has none).
+// The plan and the chains of a job read the same number.
+uint64_t bSampleStride(const ChainJobSpec& spec, const RenderSettings& settings, const Normalization& norm, int k);
+// The b samples a chain of `mutations` draws at that stride.
+inline uint64_t bSamplesFor(uint64_t mutations, uint64_t stride) { return stride ? (mutations + stride - 1) / stride : 0; }
 
 // The bootstrap of a Markov chain job: a pure function of the scene and of the settings it reads (seed,
 // method, width/height, integrator, directLight (Auto resolved by the pilot), bootstrapSamples resolved by

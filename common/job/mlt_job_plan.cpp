@@ -118,8 +118,10 @@ JobPlan planMarkovChainJob(const ChainJobSpec& spec, const RenderScene& /*scene*
       norm.bkStdErr[slot] = lb.estimate.stdErr;
     }
     norm.mutationsPerLength[slot] = Mk[l];
-    norm.bootstrapB[slot] = lb.fixedEstimate;  // unbiased (bootstrap.h): the image's b starts from it
-    norm.bootstrapSamplesInB += lb.fixedCount;
+    if (bSampleStride(spec, s, norm, lb.pathLength) == 0) {
+      norm.bootstrapB[slot] = lb.fixedEstimate;  // unbiased (bootstrap.h): the image's b starts from it
+      norm.bootstrapSamplesInB += lb.fixedCount;
+    }  // else b_k comes from the chains' Rao-Blackwellized b samples alone (develop.h (D9))
     if (norm.target().shaped()) norm.bootstrapLuminance[slot] = lb.fixedLuminanceEstimate;
     if (Mk[l] == 0) continue;
     const uint64_t chains = std::clamp<uint64_t>(Ck[l], 1, Mk[l]);

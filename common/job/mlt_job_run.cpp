@@ -127,6 +127,17 @@ PartialResult runMarkovChain(const ChainJobSpec& spec, const RenderScene& scene,
   }
   st.largeStepSums.assign(slot + 1, TargetSums{});
   st.largeStepSums[slot] = counts.largeSteps;
+  if (const uint64_t stride = bSampleStride(spec, s, norm, k); stride > 0) {
+    // b_k's samples (develop.h (D9)): every technique of length k at fresh uniform points, from a stream of
+    // their own (never the plan's candidates nor the chain's numbers), a count fixed by the plan.
+    TargetSums b;
+    const uint64_t streamSeed = hashKeys(s.seed, uint64_t(unit.index), 0x7262b5a3ULL);
+    for (uint64_t i = 0, n = bSamplesFor(unit.mutations, stride); i < n; ++i) {
+      IndependentSource source = IndependentSource::candidate(streamSeed, i);
+      b.add(target->bSample(source, k));  // tau = infinity: the plan holds no bootstrap for this slot
+    }
+    st.largeStepSums[slot] = b;
+  }
   quantizeSums(st.largeStepSums[slot], s.seed, unit.index, uint64_t(slot));
   if (shape.shaped()) {
     st.largeStepLuminanceSums.assign(slot + 1, TargetSums{});

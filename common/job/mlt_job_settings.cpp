@@ -11,6 +11,10 @@ namespace mlt {
 
 int chainMinLength(const RenderSettings& s) { return directPassSegments(s) + 1; }
 
+uint64_t bSampleStride(const ChainJobSpec& spec, const RenderSettings& settings, const Normalization& norm, int k) {
+  return norm.target().shaped() ? 0 : spec.mutationsPerBSample(settings, k);
+}
+
 std::vector<int> chainPathLengths(const ChainJobSpec& spec, const RenderSettings& s) {
   if (!spec.chainsPerLength()) return {-1};
   if (s.integrator.maxDepth == 0 || s.integrator.maxDepth < -1)

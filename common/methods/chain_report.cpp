@@ -78,6 +78,9 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   r.bootstrapSamplesInB = norm.bootstrapSamplesInB;
   for (const TargetSums& l : merged.stats.largeStepSums) r.bSamples += l.n;  // the independent proposals
   r.bSamples += norm.bootstrapSamplesInB;
+  if (const ChainJobSpec* spec = findChainJobSpec(s.method); spec && spec->chainsPerLength())
+    for (size_t k = 0; k < norm.mutationsPerLength.size(); ++k)
+      if (norm.mutationsPerLength[k] > 0) r.bSampleEvery = std::max(r.bSampleEvery, bSampleStride(*spec, s, norm, int(k)));
   r.mutations = merged.samples;
   r.mutationsPerPixel = s.mutationsPerPixel;
   r.hasAcceptance = true;
@@ -137,6 +140,7 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["bBootstrap"] = r.bBootstrap;
   m.numbers["bBootstrapStdErr"] = r.bBootstrapStdErr;
   m.numbers["bSamples"] = double(r.bSamples);
+  if (r.bSampleEvery > 0) m.numbers["bSampleEvery"] = double(r.bSampleEvery);
   m.numbers["bootstrapPerLength"] = double(r.settings.bootstrapSamples);
   m.numbers["chains"] = double(r.chains);
   m.numbers["mutations"] = double(r.mutations);
@@ -196,6 +200,7 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   // An image from before the key: b held every candidate.
   r.bootstrapSamplesInB = m.numbers.count("bootstrapSamplesInB") ? uint64_t(number(m, "bootstrapSamplesInB"))
                                                                  : r.bootstrapSamples;
+  r.bSampleEvery = m.numbers.count("bSampleEvery") ? uint64_t(number(m, "bSampleEvery")) : 0;
   r.bBootstrap = number(m, "bBootstrap");
   r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
   if (m.numbers.count("directLightShare")) {
@@ -262,7 +267,9 @@ std::string formatChainSummary(const ChainReport& r, double bootstrapSeconds, do
   if (r.bSamples <= r.bootstrapSamplesInB)
     out += "; none from the chains)\n";
   else
-    out += r.steps("large") > 0 ? " + the chains' large steps)\n" : " + the chains' independent samples)\n";
+    out += r.bSampleEvery > 0 ? fmt::format(" + the chains' b samples, every technique of a length at one fresh point "
+                                            "per {} mutations)\n", r.bSampleEvery)
+           : r.steps("large") > 0 ? " + the chains' large steps)\n" : " + the chains' independent samples)\n";
   if (!r.lengths.empty()) {
     out += fmt::format("  {:>3}  {:>25}  {:>7}  {:>12}  {:>10}  {}\n", "k", "b_k ± SE", "chains", "mutations",
                        "acceptance", "by kind");
@@ -322,7 +329,7 @@ std::string chainWarnings(const ChainReport& r) {
   const std::string remedy =
       r.bSamples > r.bootstrapSamplesInB
           ? fmt::format("render more mutations (b is refined as the chains run: now {} samples){}", r.bSamples,
-                        largeSteps ? " or raise --large-step" : "")
+                        r.bSampleEvery > 0 ? " or lower --b-sample-every" : largeSteps ? " or raise --large-step" : "")
           : fmt::format("no chain refined b, so it is the bootstrap's {} samples: render more mutations or set a "
                         "larger --bootstrap",
                         r.bootstrapSamplesInB);

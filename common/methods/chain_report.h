@@ -8,6 +8,7 @@
 //   b, bStdErr (pooled from bootstrap and large steps: the b the image was developed with; with a relative
 //   target, common/mlt/importance.h, the luminance b_lum each length is scaled to, develop.h (D8)), bBootstrap,
 //   bBootstrapStdErr, bSamples, bootstrapSamples, bootstrapSamplesInB (those b holds: bootstrap.h, fixedCount),
+//   bSampleEvery (written only where b samples refined b: develop.h (D9)),
 //   bootstrapPerLength, chains, mutations, mutationsPerPixel (the setting: rendering again with
 //   --mutations-per-pixel equal to it reproduces the image), acceptance, per mutation kind NAME (named
 //   by the method, e.g. large, small): NAMESteps and acceptanceName (capitalized: acceptanceLarge),
@@ -59,6 +60,9 @@ struct ChainReport {
   uint64_t bootstrapSamples = 0;              // bootstrap candidates (all lengths)
   uint64_t bootstrapSamplesInB = 0;           // of those, the ones b is developed from (Normalization)
   uint64_t bSamples = 0;                      // samples b was pooled from (those candidates + large steps)
+  // mmlt, rjmlt with --b-sample-every N: the lengths of several techniques refine b_k by the chains' b samples
+  // (develop.h (D9)), one per N mutations, instead of by their large steps; 0: by the large steps.
+  uint64_t bSampleEvery = 0;
   uint64_t chains = 0, mutations = 0;
   double mutationsPerPixel = 0;
   bool hasAcceptance = false;  // false: an image whose metadata does not carry the acceptance keys

@@ -1,6 +1,9 @@
 // Primary-sample-space pieces for the chain loop (chain.h): the state is a KelemenSource, the target runs
 // a PathEvaluator on it, the sink splats into a Film.
 #pragma once
+#include <stdexcept>
+#include <string>
+
 #include "common/film/film.h"
 #include "common/film/sparse_splats.h"
 #include "common/integrators/path_evaluator.h"
@@ -34,6 +37,18 @@ class PssTarget {
   virtual ~PssTarget() = default;
   // pathLength: the chain's path length k for methods with chains per length; -1 otherwise.
   virtual void evaluate(SampleSource& source, int pathLength, PathContribution& out) = 0;
+  // A Rao-Blackwellized b sample (develop.h (D9)): on a uniform `source`, the mean of c over the coordinates
+  // that only choose among the path's techniques, given the others, so E = b_k with a variance no larger
+  // than c's. Methods whose target has such coordinates (mmlt, rjmlt: one technique of length k) say so for
+  // the lengths where it differs from c; >= 0 and finite (non-finite counts as 0, as targetFunction).
+  virtual bool hasBSample(int pathLength) const {
+    (void)pathLength;
+    return false;
+  }
+  virtual double bSample(SampleSource& source, int pathLength) {
+    (void)source;
+    throw std::logic_error("this target has no b sample of its own for path length " + std::to_string(pathLength));
+  }
 };
 
 // ChainTarget adapter: evaluates a PssTarget on a fixed source and length.

@@ -39,6 +39,7 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   technique.max = 1;
   std::vector<ParamSpec> all = PrimarySampleChainMethod::params();
   all.push_back(technique);
+  all.push_back(mmltBSampleParam());
   return all;
 }
 

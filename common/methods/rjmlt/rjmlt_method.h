@@ -8,6 +8,7 @@
 // "technique".
 #pragma once
 #include "common/integrators/bdpt.h"
+#include "common/methods/mmlt/mmlt_method.h"
 #include "common/methods/pss_method.h"
 #include "common/methods/rjmlt/path_inversion.h"
 
@@ -21,6 +22,11 @@ class RjmltTarget final : public PssTarget {
  public:
   RjmltTarget(const RenderScene& scene, const IntegratorSettings& integrator);
   void evaluate(SampleSource& source, int pathLength, PathContribution& out) override;
+  // MMLT's b sample (mmlt_method.h), in a workspace of its own (ws_ holds the attached state's path).
+  bool hasBSample(int pathLength) const override { return mmltTechniqueCount(pathLength) > 1; }
+  double bSample(SampleSource& source, int pathLength) override {
+    return mmltBSample(scene_, source, pathLength, integrator_.heuristic, bSampleWs_);
+  }
   const RenderScene& scene() const { return scene_; }
   MisHeuristic heuristic() const { return integrator_.heuristic; }
   // The path of the last evaluation before a state was attached (the chain's replayed start state).
@@ -31,7 +37,7 @@ class RjmltTarget final : public PssTarget {
  private:
   const RenderScene& scene_;
   IntegratorSettings integrator_;
-  BdptWorkspace ws_;
+  BdptWorkspace ws_, bSampleWs_;
   MmltPath last_;
   bool lastValid_ = false;
   RjmltState* state_ = nullptr;
@@ -48,6 +54,9 @@ class RjmltMethod final : public PrimarySampleChainMethod {
   std::vector<std::string> mutationKinds() const override { return {"large", "small", "technique"}; }
   float defaultLargeStepProb() const override { return 0.1f; }
   std::vector<ParamSpec> params() const override;
+  uint64_t mutationsPerBSample(const RenderSettings& settings, int pathLength) const override {
+    return mmltMutationsPerBSample(*this, settings, pathLength);
+  }
   void validate(const RenderSettings& settings) const override;
   std::unique_ptr<PssTarget> makeTarget(const RenderScene& scene, const RenderSettings& settings) const override;
   // rjmlt's state needs its chain's target and length: makeChainState. makeState alone throws.
