@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <optional>
 
 #include "common/job/mlt_job.h"
@@ -53,6 +54,27 @@ double ChainReport::acceptanceOf(const std::string& kind) const {
   return 0;
 }
 
+ChainReport::CrowdedStart crowdedStart(const JobPlan& plan) {
+  std::map<std::pair<int, uint64_t>, uint64_t> onStart;  // (path length, start candidate) -> chains
+  std::map<int, uint64_t> perLength;
+  for (const WorkUnit& u : plan.units)
+    if (u.mutations > 0) {
+      ++onStart[{u.pathLength, u.startCandidate}];
+      ++perLength[u.pathLength];
+    }
+  ChainReport::CrowdedStart worst;
+  double worstShare = 0;
+  for (const auto& [key, chains] : onStart) {
+    const uint64_t of = perLength[key.first];
+    const double share = double(chains) / double(of);
+    if (chains >= kCrowdedStartChains && share >= kCrowdedStartShare && share > worstShare) {
+      worstShare = share;
+      worst = {key.first, chains, of, key.second};
+    }
+  }
+  return worst;
+}
+
 ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
   const RenderSettings& s = plan.settings;
   const Normalization& norm = plan.norm;
@@ -82,6 +104,7 @@ ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged) {
     for (size_t k = 0; k < norm.mutationsPerLength.size(); ++k)
       if (norm.mutationsPerLength[k] > 0) r.bSampleEvery = std::max(r.bSampleEvery, bSampleStride(*spec, s, norm, int(k)));
   r.mutations = merged.samples;
+  r.crowdedStart = crowdedStart(plan);
   r.mutationsPerPixel = s.mutationsPerPixel;
   r.hasAcceptance = true;
   const std::vector<std::string>& names = mutationKindNames(s.method);
@@ -141,6 +164,12 @@ void addChainMetadata(const ChainReport& r, ImageMetadata& m) {
   m.numbers["bBootstrapStdErr"] = r.bBootstrapStdErr;
   m.numbers["bSamples"] = double(r.bSamples);
   if (r.bSampleEvery > 0) m.numbers["bSampleEvery"] = double(r.bSampleEvery);
+  if (r.crowdedStart.chains > 0) {
+    m.numbers["crowdedStartLength"] = r.crowdedStart.k;
+    m.numbers["crowdedStartChains"] = double(r.crowdedStart.chains);
+    m.numbers["crowdedStartOf"] = double(r.crowdedStart.of);
+    m.numbers["crowdedStartCandidate"] = double(r.crowdedStart.candidate);
+  }
   m.numbers["bootstrapPerLength"] = double(r.settings.bootstrapSamples);
   m.numbers["chains"] = double(r.chains);
   m.numbers["mutations"] = double(r.mutations);
@@ -201,6 +230,12 @@ ChainReport chainReportFromMetadata(const ImageMetadata& m) {
   r.bootstrapSamplesInB = m.numbers.count("bootstrapSamplesInB") ? uint64_t(number(m, "bootstrapSamplesInB"))
                                                                  : r.bootstrapSamples;
   r.bSampleEvery = m.numbers.count("bSampleEvery") ? uint64_t(number(m, "bSampleEvery")) : 0;
+  if (m.numbers.count("crowdedStartChains")) {
+    r.crowdedStart.k = int(number(m, "crowdedStartLength"));
+    r.crowdedStart.chains = uint64_t(number(m, "crowdedStartChains"));
+    r.crowdedStart.of = uint64_t(number(m, "crowdedStartOf"));
+    r.crowdedStart.candidate = uint64_t(number(m, "crowdedStartCandidate"));
+  }
   r.bBootstrap = number(m, "bBootstrap");
   r.bBootstrapStdErr = number(m, "bBootstrapStdErr");
   if (m.numbers.count("directLightShare")) {
@@ -324,7 +359,15 @@ std::string formatMoveRates(const ChainReport& r) {
 }
 
 std::string chainWarnings(const ChainReport& r) {
-  if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return "";
+  std::string crowded;
+  if (const ChainReport::CrowdedStart& c = r.crowdedStart; c.chains > 0)
+    crowded = fmt::format(
+        "warning: {} of the {} chains{} start from one bootstrap candidate ({}): a path the bootstrap met far above its "
+        "share, whose pixels may come out as a bright spot that the chains leave slowly (unbiased over seeds; "
+        "docs/CHAINS.md, \"Crowded starts\"); each doubling of --bootstrap about halves the chains on it, another "
+        "--seed draws other starts\n",
+        c.chains, c.of, c.k >= 0 ? fmt::format(" of path length {}", c.k) : std::string(), c.candidate);
+  if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return crowded;
   const bool largeSteps = r.steps("large") > 0;
   const std::string remedy =
       r.bSamples > r.bootstrapSamplesInB
@@ -333,9 +376,9 @@ std::string chainWarnings(const ChainReport& r) {
           : fmt::format("no chain refined b, so it is the bootstrap's {} samples: render more mutations or set a "
                         "larger --bootstrap",
                         r.bootstrapSamplesInB);
-  return fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's brightness is "
-                     "as uncertain: {}\n",
-                     100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, remedy);
+  return crowded + fmt::format("warning: the relative standard error of b is {:.2f}% (> {:.0f}%), and the image's "
+                               "brightness is as uncertain: {}\n",
+                               100 * r.relativeStdErr(), 100 * kMaxRelativeStdErrB, remedy);
 }
 
 }  // namespace mlt
