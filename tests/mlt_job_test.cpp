@@ -454,10 +454,11 @@ TEST(MltJob, ChainReportMatchesTheChainsAndSurvivesMetadata) {
 
 TEST(MltJob, CrowdedStartsAreNamedBeforeAnyChainRuns) {
   // chain_report.h, crowdedStart. caustic-mirror at 256x256 (`mltfarm render scenes/caustic-mirror.xml --method
-  // mmlt --width 256 --height 256 --mutations-per-pixel 134 --bootstrap 23808 --seed 9`): the bootstrap met a
-  // path of length 6 far above its share and a third of that length's chains start on it (their pixel came
-  // out at 658 against the reference's 1.38, relMSE 184; docs/CHAINS.md). The plan alone shows it, the
-  // warning names it and the image's metadata carries it; the small Cornell box's plan has no crowd.
+  // mmlt --width 256 --height 256 --mutations-per-pixel 95.1 --bootstrap 17536 --seed 9`, what `--time 16`
+  // chose for that seed): the bootstrap met a path of length 6 far above its share and 34 of that length's 57
+  // chains start on it (their pixel came out at 658 against the reference's 1.38, relMSE 184; docs/CHAINS.md).
+  // The plan alone shows it, the warning names it and the image's metadata carries it; the small Cornell
+  // box's plan has no crowd.
   SceneDesc desc = loadScene(std::string(MLTFARM_SOURCE_DIR) + "/scenes/caustic-mirror.xml");
   desc.camera.width = desc.camera.height = 256;
   const std::unique_ptr<RenderScene> scene = RenderScene::build(desc);
@@ -465,8 +466,8 @@ TEST(MltJob, CrowdedStartsAreNamedBeforeAnyChainRuns) {
   s.method = "mmlt";
   s.seed = 9;
   s.integrator.maxDepth = desc.maxDepth.value_or(5);
-  s.mutationsPerPixel = 134;
-  s.bootstrapSamples = 23808;
+  s.mutationsPerPixel = 95.1;
+  s.bootstrapSamples = 17536;
   const JobPlan plan = planJob(*scene, s);
   const ChainReport::CrowdedStart c = crowdedStart(plan);
   ASSERT_GE(c.chains, kCrowdedStartChains);

@@ -83,11 +83,11 @@ struct ChainReport {
 
 // Chains start from bootstrap candidates drawn in proportion to c (stratified over the alias table), so a
 // candidate holding a share q of its length's c starts about q x C of its C chains. Where the bootstrap met a
-// rare path far above its true share (a caustic sampled by one technique: caustic-mirror, seed 9 at 256x256,
-// 23 of the 67 chains of length 6 on one candidate holding a third of b_6's candidates' sum), those chains
-// sit on it for much of their mutations and its pixel comes out many times too bright (relMSE 184 against a
-// median of 0.08; docs/CHAINS.md). Unbiased over seeds, but the run is ruined, and the plan shows it before
-// any chain runs: the report names it, the warnings say so. Crowded: at least kCrowdedStartChains chains on one
+// rare path far above its true share (caustic-mirror, seed 9 at 256x256 and 16 s: 34 of the 57 chains of
+// length 6 on one candidate), those chains sit on it for much of their mutations and its pixel comes out many
+// times too bright (relMSE 184 against a median of 0.08; docs/CHAINS.md, "Crowded starts": named in 5 of 12
+// seeds there, every bad run among them). Unbiased over seeds, but the run is ruined, and the plan shows it
+// before any chain runs: the report names it, the warnings say so. Crowded: at least kCrowdedStartChains chains on one
 // candidate and at least kCrowdedStartShare of the length's chains.
 constexpr uint64_t kCrowdedStartChains = 4;
 constexpr double kCrowdedStartShare = 0.1;
