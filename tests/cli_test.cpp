@@ -311,12 +311,13 @@ TEST_F(Cli, QuietRenderPrintsNoSummaryAndNoLogLines) {
   const fs::path out = tempDir() / "quiet.exr";
   const RunResult loud = run("render " + kScenes + "cornell-box.xml" + kSmallMmlt + "--mutations-per-pixel 1 -o " + out.string());
   ASSERT_EQ(loud.exitCode, 0) << loud.output;
-  EXPECT_NE(loud.output.find("bootstrap"), std::string::npos) << loud.output;  // the check below can fail
+  EXPECT_NE(loud.output.find("[info] mmlt: bootstrap"), std::string::npos) << loud.output;  // the check below can fail
   // 1 mutation per pixel and a bootstrap of 256 candidates per length: b's error is above 2%, which warns.
   const RunResult quiet = run("render " + kScenes + "cornell-box.xml --method mmlt --width 32 --height 32 --max-depth 4 "
                               "--bootstrap 256 --seed 5 --threads 2 --in-process --mutations-per-pixel 1 -q -o " + out.string());
   ASSERT_EQ(quiet.exitCode, 0) << quiet.output;
-  EXPECT_EQ(quiet.output.find("bootstrap"), std::string::npos) << quiet.output;
+  // (Warnings stay: this one's b, and with so small a bootstrap maybe a crowded start, which names it too.)
+  EXPECT_EQ(quiet.output.find("[info]"), std::string::npos) << quiet.output;
   EXPECT_EQ(quiet.output.find("mutations/s"), std::string::npos) << quiet.output;
   EXPECT_NE(quiet.output.find("warning: the relative standard error of b"), std::string::npos) << quiet.output;
 }

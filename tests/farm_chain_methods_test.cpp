@@ -233,5 +233,23 @@ TEST(FarmChainMethods, MmltWithAShapedTargetOnTwoWorkersMatchesTheInProcessRende
   }
 }
 
+// Rao-Blackwellized b samples (--b-sample-every, develop.h (D9)): the workers draw them beside their chains
+// and send their sums where the large steps' go; the plan holds no bootstrap estimate for those lengths. The
+// farm's image is the in-process one, bit for bit, with the same b and the stride in its metadata.
+TEST(FarmChainMethods, MmltWithBSamplesOnTwoWorkersMatchesTheInProcessRender) {
+  const Rendered r = renderBothWays(std::string(MLTFARM_SOURCE_DIR) + "/scenes/cornell-box.xml",
+                                    "--method mmlt --b-sample-every 4 --seed 7 --width 32 --height 32 "
+                                    "--mutations-per-pixel 8 --chains 24 --bootstrap 4000 --direct-light chains",
+                                    "mmlt-b-samples");
+  expectSameImageAndStatistics(r, "mmlt");
+  EXPECT_EQ(number(r.farm, "bSampleEvery"), 4.0);
+  uint64_t expected = r.local.plan.norm.bootstrapSamplesInB;  // length 1's candidates (or none: camera rays)
+  for (const WorkUnit& u : r.local.plan.units)
+    if (u.pathLength >= 2) expected += (u.mutations + 3) / 4;
+  const ChainStats& st = r.local.merged.stats;
+  if (st.largeStepSums.size() > 1) expected += st.largeStepSums[1].n;  // length 1 keeps its large steps
+  EXPECT_EQ(number(r.farm, "bSamples"), double(expected));
+}
+
 }  // namespace
 }  // namespace mlt::farm::test
