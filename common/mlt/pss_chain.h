@@ -39,12 +39,8 @@ class PssTarget {
   virtual void evaluate(SampleSource& source, int pathLength, PathContribution& out) = 0;
   // A Rao-Blackwellized b sample (develop.h (D9)): on a uniform `source`, the mean of c over the coordinates
   // that only choose among the path's techniques, given the others, so E = b_k with a variance no larger
-  // than c's. Methods whose target has such coordinates (mmlt, rjmlt: one technique of length k) say so for
-  // the lengths where it differs from c; >= 0 and finite (non-finite counts as 0, as targetFunction).
-  virtual bool hasBSample(int pathLength) const {
-    (void)pathLength;
-    return false;
-  }
+  // than c's; >= 0 and finite (non-finite counts as 0, as targetFunction). Called only for the lengths where
+  // the method's ChainJobSpec::mutationsPerBSample is > 0 (mmlt, rjmlt: one technique of several).
   virtual double bSample(SampleSource& source, int pathLength) {
     (void)source;
     throw std::logic_error("this target has no b sample of its own for path length " + std::to_string(pathLength));

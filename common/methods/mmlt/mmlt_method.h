@@ -27,7 +27,6 @@ class MmltTarget final : public PssTarget {
  public:
   MmltTarget(const RenderScene& scene, const IntegratorSettings& integrator);
   void evaluate(SampleSource& source, int pathLength, PathContribution& out) override;
-  bool hasBSample(int pathLength) const override { return mmltTechniqueCount(pathLength) > 1; }
   double bSample(SampleSource& source, int pathLength) override {
     return mmltBSample(scene_, source, pathLength, integrator_.heuristic, ws_);
   }

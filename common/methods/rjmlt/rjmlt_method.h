@@ -23,7 +23,6 @@ class RjmltTarget final : public PssTarget {
   RjmltTarget(const RenderScene& scene, const IntegratorSettings& integrator);
   void evaluate(SampleSource& source, int pathLength, PathContribution& out) override;
   // MMLT's b sample (mmlt_method.h), in a workspace of its own (ws_ holds the attached state's path).
-  bool hasBSample(int pathLength) const override { return mmltTechniqueCount(pathLength) > 1; }
   double bSample(SampleSource& source, int pathLength) override {
     return mmltBSample(scene_, source, pathLength, integrator_.heuristic, bSampleWs_);
   }
