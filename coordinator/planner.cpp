@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 
 #include "common/farm/scene_loading.h"
+#include "common/methods/chain_report.h"
+#include "common/methods/registry.h"
 #include "coordinator/coordinator.h"
 #include "proto/convert.h"
 
@@ -70,6 +72,9 @@ void Coordinator::planOne(int64_t id) {
     spdlog::info("job={} event=bootstrap_done b={} b_stderr={} units={} seconds={:.3f}", jobId, plan->norm.b,
                  plan->norm.bStdErr, plan->units.size(), plan->norm.bootstrapSeconds);
     if (plan->units.empty()) error = "the plan has no work units";
+    if (isMarkovChainMethod(settings.method))
+      if (const std::string crowded = describeCrowdedStart(crowdedStart(*plan)); !crowded.empty())
+        spdlog::warn("job={} event=crowded_start {}", jobId, crowded);
     record = wire::jobPlanBytes(*plan);
     wire::parseJobPlan(record);  // the plan must survive the wire
   } catch (const std::exception& e) {

@@ -358,15 +358,19 @@ std::string formatMoveRates(const ChainReport& r) {
   return rates;
 }
 
+std::string describeCrowdedStart(const ChainReport::CrowdedStart& c) {
+  if (c.chains == 0) return "";
+  return fmt::format(
+      "{} of the {} chains{} start from one bootstrap candidate ({}): a path the bootstrap met far above its share, "
+      "whose pixels may come out as a bright spot that the chains leave slowly (unbiased over seeds; docs/CHAINS.md, "
+      "\"Crowded starts\"); each doubling of --bootstrap about halves the chains on it, another --seed draws other "
+      "starts",
+      c.chains, c.of, c.k >= 0 ? fmt::format(" of path length {}", c.k) : std::string(), c.candidate);
+}
+
 std::string chainWarnings(const ChainReport& r) {
-  std::string crowded;
-  if (const ChainReport::CrowdedStart& c = r.crowdedStart; c.chains > 0)
-    crowded = fmt::format(
-        "warning: {} of the {} chains{} start from one bootstrap candidate ({}): a path the bootstrap met far above its "
-        "share, whose pixels may come out as a bright spot that the chains leave slowly (unbiased over seeds; "
-        "docs/CHAINS.md, \"Crowded starts\"); each doubling of --bootstrap about halves the chains on it, another "
-        "--seed draws other starts\n",
-        c.chains, c.of, c.k >= 0 ? fmt::format(" of path length {}", c.k) : std::string(), c.candidate);
+  const std::string crowded =
+      r.crowdedStart.chains > 0 ? "warning: " + describeCrowdedStart(r.crowdedStart) + "\n" : std::string();
   if (!(r.relativeStdErr() > kMaxRelativeStdErrB)) return crowded;
   const bool largeSteps = r.steps("large") > 0;
   const std::string remedy =

@@ -94,6 +94,9 @@ struct ChainReport {
 constexpr uint64_t kCrowdedStartChains = 4;
 constexpr double kCrowdedStartShare = 0.2;
 ChainReport::CrowdedStart crowdedStart(const JobPlan& plan);
+// "N of the M chains of path length k start from one bootstrap candidate (I): ..." with the remedy, one
+// sentence without a newline; "" where chains == 0. The render's warning and the planners' log lines.
+std::string describeCrowdedStart(const ChainReport::CrowdedStart& crowded);
 
 // From a plan and the chains merged so far (units of the direct pass of separateDirect are not chains).
 ChainReport makeChainReport(const JobPlan& plan, const PartialResult& merged);

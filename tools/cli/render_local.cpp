@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
+#include <spdlog/spdlog.h>
 #include <tbb/info.h>
 
 #include <algorithm>
@@ -267,6 +268,10 @@ LocalRenderResult renderLocal(const LocalRenderOptions& options) {
   }
   JobPlan& plan = result.plan;
   const size_t nUnits = plan.units.size();
+  // A crowded start (chain_report.h) is known now; the summary's warning repeats it after the render.
+  if (chains)
+    if (const std::string crowded = describeCrowdedStart(crowdedStart(plan)); !crowded.empty())
+      spdlog::warn("{}: {}", settings.method, crowded);
   std::unique_ptr<ProgressBar> progress;
   if (options.showProgress)
     progress = std::make_unique<ProgressBar>(std::string("render ") + settings.method, nUnits,
