@@ -355,7 +355,7 @@ TechniqueSample evaluateTechnique(const RenderScene& scene, SampleSource& source
 Color evaluateLength(const RenderScene& scene, SampleSource& source, int k, MisHeuristic heuristic,
                      BdptWorkspace& ws) {
   if (k < 1) return {};
-  ws.reserve(k + 1, std::max(k, 1));
+  ws.reserve(k + 1, k);
   Vec2 pRaster;
   const int nc = generateCameraSubpath(scene, source, nullptr, k + 1, -1, ws.camera.data(), &pRaster);
   const int nl = k >= 2 ? generateLightSubpath(scene, source, k, -1, ws.light.data()) : 0;

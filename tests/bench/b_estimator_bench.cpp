@@ -90,7 +90,7 @@ void measure(const std::string& name, uint64_t N) {
     t0 = threadNs();
     for (uint64_t i = 0; i < N; ++i) {  // (B2): every technique on the same numbers, the subpaths traced once
       IndependentSource source = IndependentSource::candidate(7, first + i);
-      ch.v[i] = luminance(evaluateLength(*scene, source, k, integrator.heuristic, ws));
+      ch.v[i] = mmltBSample(*scene, source, k, integrator.heuristic, ws);  // what --b-sample-every draws
     }
     ch.ns = (threadNs() - t0) / double(N);
     const double mc = c.mean(), mh = ch.mean();
