@@ -33,7 +33,7 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   ParamSpec technique;
   technique.name = "technique-step";
   technique.type = ParamSpec::Type::Double;
-  technique.defaultValue = "0.05";
+  technique.defaultValue = "0.02";
   technique.help = "probability of a technique change (a reversible jump) per mutation";
   technique.min = 0;
   technique.max = 1;
