@@ -1,5 +1,7 @@
 #include "common/methods/rjmlt/rjmlt_method.h"
 
+#include <fmt/format.h>
+
 #include <stdexcept>
 #include <string>
 
@@ -33,7 +35,7 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   ParamSpec technique;
   technique.name = "technique-step";
   technique.type = ParamSpec::Type::Double;
-  technique.defaultValue = "0.02";
+  technique.defaultValue = fmt::format("{}", RjmltSettings{}.techniqueProb);  // one default: the chain's
   technique.help = "probability of a technique change (a reversible jump) per mutation";
   technique.min = 0;
   technique.max = 1;
