@@ -45,6 +45,9 @@ std::vector<ParamSpec> RjmltMethod::params() const {
   return all;
 }
 
+// The chain's default, written once (RjmltSettings): 0.1 as a double rounded to float, the same float as 0.1f.
+float RjmltMethod::defaultLargeStepProb() const { return float(RjmltSettings{}.largeStepProb); }
+
 void RjmltMethod::validate(const RenderSettings& settings) const {
   PrimarySampleChainMethod::validate(settings);
   const double pTechnique = param(settings, "technique-step");

@@ -52,7 +52,7 @@ class RjmltMethod final : public PrimarySampleChainMethod {
   bool chainsPerLength() const override { return true; }
   bool allowsSeparateDirect() const override { return true; }
   std::vector<std::string> mutationKinds() const override { return {"large", "small", "technique"}; }
-  float defaultLargeStepProb() const override { return 0.1f; }
+  float defaultLargeStepProb() const override;  // RjmltSettings' (rjmlt_chain.h), where the value is written
   std::vector<ParamSpec> params() const override;
   uint64_t mutationsPerBSample(const RenderSettings& settings, int pathLength) const override {
     return mmltMutationsPerBSample(*this, settings, pathLength);
